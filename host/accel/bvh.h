@@ -1,0 +1,74 @@
+// Bounding volume hierarchy over the bounded primitives (spheres, triangles, polygons): built on
+// the host with a binned surface-area heuristic (Wald 2007, "On fast Construction of SAH-based
+// Bounding Volume Hierarchies"), flattened depth first for the shader (shaders/lib/scene.glsl).
+#pragma once
+
+#include <cstdint>
+#include <limits>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "../../shaders/shared/gpu_types.h"
+
+namespace vkray {
+
+struct Aabb {
+  glm::vec3 min{std::numeric_limits<float>::infinity()};
+  glm::vec3 max{-std::numeric_limits<float>::infinity()};
+
+  void grow(const glm::vec3& p) {
+    min = glm::min(min, p);
+    max = glm::max(max, p);
+  }
+  void grow(const Aabb& b) {
+    min = glm::min(min, b.min);
+    max = glm::max(max, b.max);
+  }
+  bool empty() const { return min.x > max.x; }
+  glm::vec3 center() const { return 0.5f * (min + max); }
+  float surfaceArea() const {
+    if (empty()) return 0.0f;
+    glm::vec3 d = max - min;
+    return 2.0f * (d.x * d.y + d.y * d.z + d.z * d.x);
+  }
+  bool contains(const Aabb& b) const {
+    return glm::all(glm::lessThanEqual(min, b.min)) && glm::all(glm::greaterThanEqual(max, b.max));
+  }
+};
+
+struct BvhPrimitive {
+  Aabb bounds;
+  std::uint32_t ref = 0; // kind << kPrimKindShift | index, as in PrimRefs[]
+};
+
+struct BvhOptions {
+  int bins = 16;
+  int maxLeafSize = 4;
+  int maxDepth = 32;              // = kBvhStackSize in the shader: traversal never overflows
+  float traversalCost = 1.0f;     // SAH cost of visiting a node, relative to one primitive test
+};
+
+struct BvhStats {
+  double buildMs = 0.0;
+  std::size_t nodes = 0;
+  std::size_t leaves = 0;
+  int depth = 0;           // longest root-to-leaf path, in nodes
+  std::size_t maxLeafSize = 0;
+  double sahCost = 0.0;    // expected cost of a random ray, in primitive tests
+};
+
+struct Bvh {
+  std::vector<gpu::BvhNode> nodes;     // nodes[0] is the root; empty when there are no primitives
+  std::vector<std::uint32_t> primRefs; // leaf ranges index this
+  BvhStats stats;
+};
+
+Bvh buildBvh(std::vector<BvhPrimitive> primitives, const BvhOptions& options = {});
+
+// Bounds of a node as the shader sees them.
+inline Aabb nodeBounds(const gpu::BvhNode& n) { return Aabb{n.boundsMin, n.boundsMax}; }
+inline std::uint32_t nodeCount(const gpu::BvhNode& n) { return n.countAxis & 0xFFFFu; }
+inline std::uint32_t nodeAxis(const gpu::BvhNode& n) { return (n.countAxis >> 16) & 3u; }
+
+} // namespace vkray

@@ -1,0 +1,52 @@
+// Shared command-line flags (see cli_options.h).
+#include "app/cli_options.h"
+
+#include "scene/scene_limits.h"
+
+namespace vkray {
+
+void addDeviceFlags(CLI::App& app, DeviceFlags& f) {
+  app.add_option("--device", f.device, "Vulkan device: index or name substring (see 'vkray info')")
+      ->envname("VKRAY_DEVICE");
+  app.add_flag("--validate", f.validate, "enable the Khronos validation layer; any message fails the run");
+  app.add_flag("--sync-validation", f.syncValidate, "also enable its synchronization validation");
+  app.add_flag("--no-pipeline-cache", f.noPipelineCache, "do not read or write the on-disk pipeline cache");
+}
+
+void addRenderFlags(CLI::App& app, RenderFlags& f) {
+  app.add_option("--width", f.width, "image width in pixels")->check(CLI::Range(1ll, kMaxImageSide));
+  app.add_option("--height", f.height, "image height in pixels")->check(CLI::Range(1ll, kMaxImageSide));
+  app.add_option("--max-depth", f.maxDepth, "reflection/refraction bounces after the eye ray")
+      ->check(CLI::Range(0ll, kMaxDepthLimit));
+  app.add_option("--spp", f.spp, "samples per pixel")->check(CLI::Range(1ll, kMaxSpp));
+  app.add_option("--bailout", f.bailout, "skip branches whose weight is below this (0: trace all)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--aa", f.antialiasing, "antialiasing: stratified (every pixel gets spp) or adaptive")
+      ->check(CLI::IsMember({"stratified", "adaptive"}));
+  app.add_option("--adaptive-threshold", f.adaptiveThreshold, "adaptive AA: neighbour difference that triggers spp")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--numerics", f.numerics, "intersection numerics: robust (default) or naive")
+      ->check(CLI::IsMember({"robust", "naive"}));
+  app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")->check(CLI::IsMember({"exact", "schlick"}));
+  app.add_option("--transmissive-shadows", f.transmissiveShadows, "shadows of glass: attenuated or opaque")
+      ->check(CLI::IsMember({"attenuated", "opaque"}));
+  app.add_option("--bvh", f.bvh, "acceleration structure: auto, on or off")->check(CLI::IsMember({"auto", "on", "off"}));
+}
+
+void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
+  if (f.width) s.width = *f.width;
+  if (f.height) s.height = *f.height;
+  if (f.maxDepth) s.maxDepth = *f.maxDepth;
+  if (f.spp) s.spp = *f.spp;
+  if (f.bailout) s.bailout = *f.bailout;
+  if (f.adaptiveThreshold) s.adaptiveThreshold = *f.adaptiveThreshold;
+  if (f.antialiasing) s.antialiasing = *f.antialiasing == "adaptive" ? Antialiasing::Adaptive : Antialiasing::Stratified;
+  if (f.numerics) s.numerics = *f.numerics == "naive" ? Numerics::Naive : Numerics::Robust;
+  if (f.fresnel) s.fresnel = *f.fresnel == "schlick" ? FresnelMode::Schlick : FresnelMode::Exact;
+  if (f.transmissiveShadows) {
+    s.transmissiveShadows = *f.transmissiveShadows == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
+  }
+  if (f.bvh) s.bvh = *f.bvh == "on" ? BvhMode::On : *f.bvh == "off" ? BvhMode::Off : BvhMode::Auto;
+}
+
+} // namespace vkray

@@ -1,0 +1,32 @@
+// Command-line flags shared by render, view and bench: device choice and the overrides of the
+// scene's render settings. Flags always win over the scene file.
+#pragma once
+
+#include <optional>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+#include "scene/scene.h"
+
+namespace vkray {
+
+struct DeviceFlags {
+  std::string device;      // --device
+  bool validate = false;   // --validate
+  bool syncValidate = false; // --sync-validation
+  bool noPipelineCache = false;
+};
+
+struct RenderFlags {
+  std::optional<std::uint32_t> width, height;
+  std::optional<int> maxDepth, spp;
+  std::optional<double> bailout, adaptiveThreshold;
+  std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh;
+};
+
+void addDeviceFlags(CLI::App& app, DeviceFlags& flags);
+void addRenderFlags(CLI::App& app, RenderFlags& flags);
+void applyRenderFlags(const RenderFlags& flags, RenderSettings& settings);
+
+} // namespace vkray

@@ -1,0 +1,150 @@
+// `vkray render`: load, analyse, build, render, write — in that order, as the design draws it.
+#include <chrono>
+#include <cstdio>
+
+#include "app/commands.h"
+#include "app/terminal.h"
+#include "image/image_io.h"
+#include "render/renderer.h"
+#include "scene/features.h"
+#include "scene/scene_loader.h"
+#include "util/error.h"
+#include "vk/context.h"
+
+namespace vkray {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+void printStat(const char* name, double ms) { std::printf("%s: %.2f ms\n", name, ms); }
+
+} // namespace
+
+int runRender(const RenderArgs& args) {
+  auto t0 = Clock::now();
+  Scene scene = loadScene(args.scene);
+  applyRenderFlags(args.render, scene.render);
+  double loadMs = msSince(t0);
+  // Fail on an unwritable output before spending any time on the GPU.
+  checkOutputPath(args.output);
+
+  Features features = analyzeScene(scene, scene.render);
+  if (args.explain) {
+    std::printf("%s, %ux%u, max_depth %d, %d spp:\n", args.scene.string().c_str(), scene.render.width,
+                scene.render.height, scene.render.maxDepth, scene.render.spp);
+    for (const auto& line : features.explain()) std::printf("  %s\n", line.c_str());
+    std::fflush(stdout);
+  }
+
+  vulkan::ContextOptions ctxOptions;
+  ctxOptions.validation = args.device.validate;
+  ctxOptions.synchronizationValidation = args.device.syncValidate;
+  ctxOptions.device = args.device.device;
+  vulkan::Context context(ctxOptions);
+  std::unique_ptr<vulkan::PipelineCache> cache;
+  if (!args.device.noPipelineCache) {
+    cache = std::make_unique<vulkan::PipelineCache>(context, vulkan::PipelineCache::defaultFile(context));
+  }
+
+  Renderer renderer(context, cache.get());
+  renderer.setScene(scene);
+
+  const auto& interrupted = installInterruptFlag();
+  ProgressBar bar(!args.quiet);
+  RenderOptions options;
+  options.specialize = !args.noSpecialize;
+  options.countStats = args.stats;
+  options.bandBudgetMs = args.bandMs;
+  options.cancel = &interrupted;
+  options.progress = [&](const RenderProgress& p) { bar.update(p); };
+  RenderResult result = renderer.render(scene.camera, scene.render, options);
+  bar.finish();
+
+  if (context.validationEnabled() && context.validationMessageCount() > 0) {
+    throw DeviceError("the validation layer reported " + std::to_string(context.validationMessageCount()) +
+                      " message(s); no output written");
+  }
+  if (result.stats.nonFinite > 0) {
+    std::fprintf(stderr, "vkray: warning: %llu samples were NaN/Inf and were replaced by black\n",
+                 static_cast<unsigned long long>(result.stats.nonFinite));
+  }
+
+  auto tw = Clock::now();
+  writeImage(args.output, result.image);
+  double writeMs = msSince(tw);
+
+  if (args.stats) {
+    const auto& info = context.info();
+    const auto& s = result.stats;
+    std::printf("scene: %s\n", args.scene.string().c_str());
+    std::printf("device: %s (%s)\n", info.name.c_str(), info.driver.c_str());
+    std::printf("image: %ux%u\n", scene.render.width, scene.render.height);
+    std::printf("spp: %d\n", scene.render.spp);
+    std::printf("max depth: %d\n", scene.render.maxDepth);
+    for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
+    printStat("load", loadMs);
+    if (renderer.gpuScene().bvh.stats.nodes > 0) {
+      const auto& b = renderer.gpuScene().bvh.stats;
+      printStat("bvh build", b.buildMs);
+      std::printf("bvh nodes: %zu\n", b.nodes);
+      std::printf("bvh depth: %d\n", b.depth);
+      std::size_t tris = renderer.gpuScene().triangles.size();
+      std::size_t bvhBytes = renderer.gpuScene().bvh.nodes.size() * sizeof(gpu::BvhNode) +
+                             renderer.gpuScene().bvh.primRefs.size() * sizeof(std::uint32_t);
+      std::printf("bvh bytes: %zu\n", bvhBytes);
+      if (tris > 0) std::printf("bytes per triangle: %.1f\n", static_cast<double>(bvhBytes + tris * sizeof(gpu::Triangle)) / tris);
+    }
+    printStat("upload", renderer.uploadMs());
+    printStat("pipeline", result.timings.pipelineMs);
+    std::printf("pipeline cache: %s\n",
+                !cache ? "off" : cache->loadedFromDisk() ? "loaded from disk" : "empty (first run on this device)");
+    printStat("trace", result.timings.traceMs);
+    printStat("trace wall", result.timings.traceWallMs);
+    std::printf("bands: %d\n", result.timings.bands);
+    printStat("readback", result.timings.readbackMs);
+    printStat("write", writeMs);
+    printStat("total", msSince(t0));
+    std::printf("eye rays: %llu\n", static_cast<unsigned long long>(s.eye));
+    std::printf("shadow rays: %llu\n", static_cast<unsigned long long>(s.shadow));
+    std::printf("reflection rays: %llu\n", static_cast<unsigned long long>(s.reflection));
+    std::printf("refraction rays: %llu\n", static_cast<unsigned long long>(s.refraction));
+    std::printf("rays: %llu\n", static_cast<unsigned long long>(s.total()));
+    std::printf("bailout saved: %llu\n", static_cast<unsigned long long>(s.bailoutSaved));
+    std::printf("stack overflow: %llu\n", static_cast<unsigned long long>(s.stackOverflow));
+    std::printf("refined pixels: %llu\n", static_cast<unsigned long long>(s.refinedPixels));
+    std::printf("deepest bounce: %u\n", s.maxDepth);
+    double seconds = result.timings.traceMs * 1e-3;
+    double rps = seconds > 0 ? static_cast<double>(s.total()) / seconds : 0.0;
+    std::printf("rays per second: %.0f\n", rps);
+    std::printf("mrays/s: %.2f\n", rps * 1e-6);
+  }
+  return 0;
+}
+
+int runInfo(const DeviceFlags& flags) {
+  auto devices = vulkan::Context::listDevices();
+  if (devices.empty()) throw DeviceError("no Vulkan device found: install a driver (apt-get install mesa-vulkan-drivers)");
+  for (const auto& d : devices) {
+    std::printf("device %u: %s\n", d.index, d.name.c_str());
+    std::printf("  type: %s\n", d.type.c_str());
+    std::printf("  driver: %s\n", d.driver.c_str());
+    std::printf("  vulkan: %u.%u.%u\n", VK_API_VERSION_MAJOR(d.apiVersion), VK_API_VERSION_MINOR(d.apiVersion),
+                VK_API_VERSION_PATCH(d.apiVersion));
+    std::printf("  shaderFloat64: %s (float64 reference kernel)\n", d.shaderFloat64 ? "yes" : "no");
+    std::printf("  timestamps: %s (GPU trace time)\n", d.timestamps ? "yes" : "no");
+    std::printf("  maxStorageBufferRange: %llu MiB (largest scene array / image band)\n",
+                static_cast<unsigned long long>(d.maxStorageBufferRange >> 20));
+    std::printf("  maxMemoryAllocationSize: %llu MiB\n", static_cast<unsigned long long>(d.maxMemoryAllocationSize >> 20));
+  }
+  if (!flags.device.empty()) {
+    vulkan::ContextOptions options;
+    options.device = flags.device;
+    vulkan::Context context(options);
+    std::printf("selected: %s\n", context.info().name.c_str());
+  }
+  return 0;
+}
+
+} // namespace vkray

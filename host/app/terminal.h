@@ -1,0 +1,26 @@
+// Terminal concerns of the command line: the Ctrl-C flag checked between bands, and the progress
+// bar drawn on stderr when it is a terminal.
+#pragma once
+
+#include <atomic>
+
+#include "render/renderer.h"
+
+namespace vkray {
+
+// Installs a SIGINT handler that sets the returned flag; a second Ctrl-C kills at once.
+const std::atomic<bool>& installInterruptFlag();
+
+class ProgressBar {
+ public:
+  explicit ProgressBar(bool enabled);
+  ~ProgressBar();
+  void update(const RenderProgress& p);
+  void finish();
+
+ private:
+  bool enabled_;
+  bool drawn_ = false;
+};
+
+} // namespace vkray

@@ -1,0 +1,33 @@
+// An image in linear RGB floats, row-major, (0, 0) at the top-left.
+#pragma once
+
+#include <cstdint>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace vkray {
+
+struct Image {
+  std::uint32_t width = 0;
+  std::uint32_t height = 0;
+  std::vector<glm::vec3> pixels; // width * height
+
+  Image() = default;
+  Image(std::uint32_t w, std::uint32_t h, glm::vec3 fill = glm::vec3(0.0f))
+      : width(w), height(h), pixels(static_cast<std::size_t>(w) * h, fill) {}
+
+  glm::vec3& at(std::uint32_t x, std::uint32_t y) { return pixels[static_cast<std::size_t>(y) * width + x]; }
+  const glm::vec3& at(std::uint32_t x, std::uint32_t y) const {
+    return pixels[static_cast<std::size_t>(y) * width + x];
+  }
+};
+
+// sRGB transfer function (IEC 61966-2-1), on [0, 1].
+float linearToSrgb(float linear);
+float srgbToLinear(float encoded);
+
+// 8-bit sRGB value of a linear value: clamped, encoded, rounded to nearest.
+std::uint8_t encodeSrgb8(float linear);
+
+} // namespace vkray

@@ -1,0 +1,171 @@
+// PNG/PFM encoding and decoding, and atomic file writes.
+#include "image/image_io.h"
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define STB_IMAGE_WRITE_IMPLEMENTATION
+#define STB_IMAGE_WRITE_STATIC
+#include <stb/stb_image_write.h>
+#define STB_IMAGE_IMPLEMENTATION
+#define STB_IMAGE_STATIC
+#define STBI_ONLY_PNG
+#include <stb/stb_image.h>
+
+#include "util/error.h"
+
+namespace vkray {
+
+namespace fs = std::filesystem;
+
+ImageFormat imageFormatFor(const fs::path& path) {
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".png") return ImageFormat::Png;
+  if (ext == ".pfm") return ImageFormat::Pfm;
+  throw InputError(path.string(), "unknown image format '" + ext + "' (use .png or .pfm)");
+}
+
+void checkOutputPath(const fs::path& path) {
+  imageFormatFor(path);
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) throw InputError(path.string(), "is a directory");
+  fs::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  if (!fs::is_directory(dir, ec)) throw InputError(path.string(), "directory '" + dir.string() + "' does not exist");
+  if (::access(dir.c_str(), W_OK) != 0) {
+    throw InputError(path.string(), "cannot write to directory '" + dir.string() + "': " + std::strerror(errno));
+  }
+}
+
+std::vector<std::uint8_t> encodePng(const Image& image) {
+  std::vector<std::uint8_t> rgb(static_cast<std::size_t>(image.width) * image.height * 3);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+    for (int c = 0; c < 3; ++c) rgb[i * 3 + static_cast<std::size_t>(c)] = encodeSrgb8(image.pixels[i][c]);
+  }
+  std::vector<std::uint8_t> out;
+  auto sink = [](void* ctx, void* data, int size) {
+    auto* v = static_cast<std::vector<std::uint8_t>*>(ctx);
+    auto* bytes = static_cast<std::uint8_t*>(data);
+    v->insert(v->end(), bytes, bytes + size);
+  };
+  int ok = stbi_write_png_to_func(sink, &out, static_cast<int>(image.width), static_cast<int>(image.height), 3,
+                                  rgb.data(), static_cast<int>(image.width * 3));
+  if (!ok) throw Error("PNG encoding failed");
+  return out;
+}
+
+std::vector<std::uint8_t> encodePfm(const Image& image) {
+  // PFM: "PF", size, negative scale for little-endian; rows from the bottom up.
+  std::string header = "PF\n" + std::to_string(image.width) + " " + std::to_string(image.height) + "\n-1.0\n";
+  std::vector<std::uint8_t> out(header.begin(), header.end());
+  out.reserve(out.size() + image.pixels.size() * 12);
+  for (std::uint32_t row = image.height; row-- > 0;) {
+    const auto* p = reinterpret_cast<const std::uint8_t*>(&image.pixels[static_cast<std::size_t>(row) * image.width]);
+    out.insert(out.end(), p, p + static_cast<std::size_t>(image.width) * 12);
+  }
+  static_assert(sizeof(glm::vec3) == 12);
+  return out;
+}
+
+void writeFileAtomic(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
+  fs::path dir = path.parent_path();
+  if (dir.empty()) dir = ".";
+  std::string tmpl = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  std::vector<char> name(tmpl.begin(), tmpl.end());
+  name.push_back('\0');
+  int fd = ::mkstemp(name.data());
+  if (fd < 0) throw InputError(path.string(), std::string("cannot create a file here: ") + std::strerror(errno));
+  auto fail = [&](const char* what) {
+    int err = errno;
+    ::close(fd);
+    ::unlink(name.data());
+    throw InputError(path.string(), std::string(what) + ": " + std::strerror(err));
+  };
+  std::size_t done = 0;
+  while (done < bytes.size()) {
+    ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
+    if (n < 0) {
+      if (errno == EINTR) continue;
+      fail("cannot write");
+    }
+    done += static_cast<std::size_t>(n);
+  }
+  if (::fsync(fd) != 0) fail("cannot flush to disk");
+  ::fchmod(fd, 0644);
+  if (::close(fd) != 0) {
+    int err = errno;
+    ::unlink(name.data());
+    throw InputError(path.string(), std::string("cannot close: ") + std::strerror(err));
+  }
+  if (::rename(name.data(), path.c_str()) != 0) {
+    int err = errno;
+    ::unlink(name.data());
+    throw InputError(path.string(), std::string("cannot replace: ") + std::strerror(err));
+  }
+}
+
+void writeImage(const fs::path& path, const Image& image) {
+  writeFileAtomic(path, imageFormatFor(path) == ImageFormat::Png ? encodePng(image) : encodePfm(image));
+}
+
+namespace {
+
+Image readPfm(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string(), "cannot open for reading");
+  std::string magic;
+  std::uint32_t w = 0, h = 0;
+  double scale = 0.0;
+  in >> magic >> w >> h >> scale;
+  in.get();
+  if (!in || (magic != "PF" && magic != "Pf") || w == 0 || h == 0 || w > 65536 || h > 65536) {
+    throw InputError(path.string(), "not a PFM image");
+  }
+  int channels = magic == "PF" ? 3 : 1;
+  std::vector<float> data(static_cast<std::size_t>(w) * h * static_cast<std::size_t>(channels));
+  in.read(reinterpret_cast<char*>(data.data()), static_cast<std::streamsize>(data.size() * sizeof(float)));
+  if (!in) throw InputError(path.string(), "truncated PFM data");
+  if (scale > 0) { // big-endian data
+    for (float& f : data) {
+      std::uint32_t u;
+      std::memcpy(&u, &f, 4);
+      u = __builtin_bswap32(u);
+      std::memcpy(&f, &u, 4);
+    }
+  }
+  Image img(w, h);
+  for (std::uint32_t y = 0; y < h; ++y) {
+    for (std::uint32_t x = 0; x < w; ++x) {
+      std::size_t src = (static_cast<std::size_t>(h - 1 - y) * w + x) * static_cast<std::size_t>(channels);
+      img.at(x, y) = channels == 3 ? glm::vec3(data[src], data[src + 1], data[src + 2]) : glm::vec3(data[src]);
+    }
+  }
+  return img;
+}
+
+} // namespace
+
+Image readImage(const fs::path& path) {
+  if (imageFormatFor(path) == ImageFormat::Pfm) return readPfm(path);
+  int w = 0, h = 0, n = 0;
+  stbi_uc* data = stbi_load(path.c_str(), &w, &h, &n, 3);
+  if (!data) throw InputError(path.string(), std::string("cannot read PNG: ") + stbi_failure_reason());
+  Image img(static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h));
+  for (std::size_t i = 0; i < img.pixels.size(); ++i) {
+    for (int c = 0; c < 3; ++c) img.pixels[i][c] = srgbToLinear(data[i * 3 + static_cast<std::size_t>(c)] / 255.0f);
+  }
+  stbi_image_free(data);
+  return img;
+}
+
+} // namespace vkray

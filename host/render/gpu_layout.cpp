@@ -1,0 +1,28 @@
+// Compile-time checks that the C++ view of shaders/shared/gpu_types.h matches std430/std140: every
+// size and offset the shaders rely on. A mismatch fails the build, not the image.
+#include <cstddef>
+
+#include "../../shaders/shared/gpu_types.h"
+
+namespace vkray::gpu {
+
+static_assert(sizeof(Material) == 80);
+static_assert(offsetof(Material, color2) == 16 && offsetof(Material, phong) == 32);
+static_assert(offsetof(Material, transmission) == 48 && offsetof(Material, absorption) == 64);
+static_assert(sizeof(Light) == 32 && offsetof(Light, color) == 16);
+static_assert(sizeof(Sphere) == 32 && offsetof(Sphere, meta) == 16);
+static_assert(sizeof(Plane) == 32 && offsetof(Plane, meta) == 16);
+static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof(Triangle, v2) == 32);
+static_assert(sizeof(Polygon) == 32 && offsetof(Polygon, meta) == 16);
+// vec3 + uint pairs: std430 puts the uint in the vec3's fourth slot.
+static_assert(sizeof(BvhNode) == 32);
+static_assert(offsetof(BvhNode, offset) == 12 && offsetof(BvhNode, boundsMax) == 16 && offsetof(BvhNode, countAxis) == 28);
+static_assert(sizeof(FrameParams) == 11 * 16);
+static_assert(offsetof(FrameParams, knobs) == 112 && offsetof(FrameParams, imageSize) == 128);
+static_assert(offsetof(FrameParams, counts) == 144 && offsetof(FrameParams, counts2) == 160);
+static_assert(sizeof(RayStats) == 48);
+static_assert(sizeof(PushConstants) == 48 && offsetof(PushConstants, pass) == 16 &&
+              offsetof(PushConstants, imageRow0) == 32);
+static_assert(sizeof(PushConstants) <= 128, "Vulkan guarantees 128 bytes of push constants");
+
+} // namespace vkray::gpu

@@ -1,0 +1,136 @@
+// Packing the scene into GPU arrays (see gpu_scene.h).
+#include "render/gpu_scene.h"
+
+#include <bit>
+#include <cmath>
+
+namespace vkray {
+
+namespace {
+
+glm::vec3 rel(const glm::dvec3& p, const glm::dvec3& origin) { return glm::vec3(p - origin); }
+
+// float(x) may round towards the inside of a box; step one ulp outwards so bounds stay conservative.
+float down(double x) {
+  float f = static_cast<float>(x);
+  return static_cast<double>(f) > x ? std::nextafter(f, -INFINITY) : f;
+}
+float up(double x) {
+  float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, INFINITY) : f;
+}
+
+} // namespace
+
+std::size_t GpuScene::bytes() const {
+  return materials.size() * sizeof(gpu::Material) + lights.size() * sizeof(gpu::Light) +
+         spheres.size() * sizeof(gpu::Sphere) + planes.size() * sizeof(gpu::Plane) +
+         triangles.size() * sizeof(gpu::Triangle) + polygons.size() * sizeof(gpu::Polygon) +
+         (polyVertices.size() + normals.size()) * sizeof(glm::vec4) + bvh.nodes.size() * sizeof(gpu::BvhNode) +
+         bvh.primRefs.size() * sizeof(std::uint32_t);
+}
+
+GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, const BvhOptions& bvhOptions) {
+  GpuScene g;
+  g.origin = origin;
+  g.background = scene.background;
+  g.ambientLight = scene.ambientLight;
+  for (const Material& m : scene.materials) {
+    gpu::Material gm{};
+    gm.color = glm::vec4(glm::vec3(m.color), static_cast<float>(m.ambient));
+    gm.color2 = m.checker ? glm::vec4(glm::vec3(m.checker->color2), static_cast<float>(m.checker->scale)) : glm::vec4(0.0f);
+    gm.phong = glm::vec4(static_cast<float>(m.diffuse), static_cast<float>(m.specular), static_cast<float>(m.shininess),
+                         static_cast<float>(m.reflection));
+    gm.transmission = glm::vec4(static_cast<float>(m.transmission), static_cast<float>(m.ior), 0.0f, 0.0f);
+    gm.absorption = glm::vec4(glm::vec3(m.absorption), 0.0f);
+    g.materials.push_back(gm);
+  }
+  for (const PointLight& l : scene.lights) {
+    g.lights.push_back(gpu::Light{glm::vec4(rel(l.position, origin), l.shadows ? 1.0f : 0.0f), glm::vec4(glm::vec3(l.color), 0.0f)});
+  }
+  for (const Sphere& s : scene.spheres) {
+    g.spheres.push_back(gpu::Sphere{glm::vec4(rel(s.center, origin), static_cast<float>(s.radius)), glm::uvec4(s.material, 0, 0, 0)});
+  }
+  for (const Plane& p : scene.planes) {
+    // n.(x_rel + origin) + D = 0  =>  n.x_rel + (D + n.origin) = 0
+    double d = p.offset + glm::dot(p.normal, origin);
+    g.planes.push_back(gpu::Plane{glm::vec4(glm::vec3(p.normal), static_cast<float>(d)), glm::uvec4(p.material, 0, 0, 0)});
+  }
+  for (const Polygon& poly : scene.polygons) {
+    auto first = static_cast<std::uint32_t>(g.polyVertices.size());
+    for (const auto& v : poly.vertices) g.polyVertices.emplace_back(rel(v, origin), 0.0f);
+    double d = -glm::dot(poly.normal, poly.vertices[0] - origin);
+    g.polygons.push_back(gpu::Polygon{glm::vec4(glm::vec3(poly.normal), static_cast<float>(d)),
+                                      glm::uvec4(first, static_cast<std::uint32_t>(poly.vertices.size()), poly.material, 0)});
+  }
+  for (const Triangle& t : scene.triangles) {
+    std::uint32_t normalBase = gpu::kNoNormals;
+    if (t.normals) {
+      normalBase = static_cast<std::uint32_t>(g.normals.size());
+      for (const auto& n : *t.normals) g.normals.emplace_back(glm::vec3(n), 0.0f);
+    }
+    g.triangles.push_back(gpu::Triangle{glm::vec4(rel(t.v[0], origin), std::bit_cast<float>(t.material)),
+                                        glm::vec4(rel(t.v[1], origin), std::bit_cast<float>(normalBase)),
+                                        glm::vec4(rel(t.v[2], origin), 0.0f)});
+  }
+
+  if (withBvh) {
+    std::vector<BvhPrimitive> prims;
+    prims.reserve(scene.boundedPrimitiveCount());
+    for (std::size_t i = 0; i < g.spheres.size(); ++i) {
+      // Bounds from the double centre and radius, rounded outwards: they contain the float sphere.
+      const Sphere& s = scene.spheres[i];
+      glm::dvec3 c = s.center - origin;
+      double r = s.radius * (1.0 + 1e-6);
+      Aabb b;
+      b.min = glm::vec3(down(c.x - r), down(c.y - r), down(c.z - r));
+      b.max = glm::vec3(up(c.x + r), up(c.y + r), up(c.z + r));
+      prims.push_back({b, gpu::kPrimSphere << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
+    }
+    for (std::size_t i = 0; i < g.triangles.size(); ++i) {
+      // The float vertices themselves: the box is exact.
+      Aabb b;
+      b.grow(glm::vec3(g.triangles[i].v0));
+      b.grow(glm::vec3(g.triangles[i].v1));
+      b.grow(glm::vec3(g.triangles[i].v2));
+      prims.push_back({b, gpu::kPrimTriangle << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
+    }
+    for (std::size_t i = 0; i < g.polygons.size(); ++i) {
+      Aabb b;
+      for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k) b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
+      prims.push_back({b, gpu::kPrimPolygon << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
+    }
+    g.bvh = buildBvh(std::move(prims), bvhOptions);
+  }
+  return g;
+}
+
+CameraFrame makeCameraFrame(const Camera& camera, std::uint32_t width, std::uint32_t height) {
+  CameraFrame f;
+  f.position = camera.position;
+  f.forward = glm::normalize(camera.lookAt - camera.position);
+  // A degenerate `up` (parallel to the view) would make right = 0/0: try the world axes instead.
+  const glm::dvec3 candidates[] = {camera.up, {0, 1, 0}, {0, 0, 1}, {1, 0, 0}};
+  glm::dvec3 right(1, 0, 0);
+  for (const auto& u : candidates) {
+    glm::dvec3 c = glm::cross(f.forward, u);
+    double len = glm::length(c);
+    if (len > 1e-9 * glm::length(u)) {
+      right = c / len;
+      break;
+    }
+  }
+  f.right = right;
+  f.up = glm::cross(f.right, f.forward);
+  f.tanHalfFovY = std::tan(glm::radians(camera.fovY) * 0.5);
+  f.aspect = static_cast<double>(width) / static_cast<double>(height);
+  return f;
+}
+
+glm::dvec3 CameraFrame::rayDirection(double px, double py, std::uint32_t width, std::uint32_t height) const {
+  double x = 2.0 * px / width - 1.0;
+  double y = 1.0 - 2.0 * py / height;
+  return forward + x * (right * tanHalfFovY * aspect) + y * (up * tanHalfFovY);
+}
+
+} // namespace vkray

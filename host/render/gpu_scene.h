@@ -1,0 +1,53 @@
+// The scene packed for the GPU: flat arrays of the structs in shaders/shared/gpu_types.h, in a
+// camera-relative frame. Coordinates are shifted by `origin` (in double) before rounding to float,
+// so hits near the camera keep full float precision even when the scene sits at 1e5 from the world
+// origin ("camera-relative rendering").
+#pragma once
+
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "../../shaders/shared/gpu_types.h"
+#include "accel/bvh.h"
+#include "scene/scene.h"
+
+namespace vkray {
+
+struct GpuScene {
+  glm::dvec3 origin{0.0}; // world position of the packed frame's origin
+  glm::dvec3 background{0.0};
+  glm::dvec3 ambientLight{0.0};
+  std::vector<gpu::Material> materials;
+  std::vector<gpu::Light> lights;
+  std::vector<gpu::Sphere> spheres;
+  std::vector<gpu::Plane> planes;
+  std::vector<gpu::Triangle> triangles;
+  std::vector<gpu::Polygon> polygons;
+  std::vector<glm::vec4> polyVertices;
+  std::vector<glm::vec4> normals;
+  Bvh bvh; // empty unless asked for
+
+  std::size_t bytes() const;
+};
+
+// Packs the scene relative to `origin`; builds the BVH when withBvh.
+GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, const BvhOptions& bvhOptions = {});
+
+// The camera basis as the kernel uses it (forward, right and up scaled by the field of view).
+// An `up` parallel to the view direction falls back to another axis instead of producing NaN.
+struct CameraFrame {
+  glm::dvec3 position;
+  glm::dvec3 forward;
+  glm::dvec3 right; // unit
+  glm::dvec3 up;    // unit
+  double tanHalfFovY;
+  double aspect;
+
+  // Direction (not normalised) through image-plane point (px, py) in pixels, y down.
+  glm::dvec3 rayDirection(double px, double py, std::uint32_t width, std::uint32_t height) const;
+};
+
+CameraFrame makeCameraFrame(const Camera& camera, std::uint32_t width, std::uint32_t height);
+
+} // namespace vkray

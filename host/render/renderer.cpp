@@ -1,0 +1,397 @@
+// Renderer: scene upload, specialized pipelines, banded dispatch, readback and statistics.
+#include "render/renderer.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstring>
+
+#include "trace_spv.h" // kTraceSpv: shaders/trace.comp compiled at build time
+#include "util/error.h"
+
+namespace vkray {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+
+// Bytes of image window the renderer allows itself: bands of rows are traced into it and read back.
+constexpr vk::DeviceSize kImageWindowBudget = 64ull << 20;
+
+template <typename T> void uploadArray(std::unique_ptr<vulkan::Buffer>& buffer, const vulkan::Context& ctx,
+                                       const std::vector<T>& data, const std::string& name) {
+  buffer = std::make_unique<vulkan::Buffer>(ctx, data.size() * sizeof(T), vk::BufferUsageFlagBits::eStorageBuffer,
+                                            vulkan::MemoryUse::DeviceLocal, name);
+  buffer->write(data.data(), data.size() * sizeof(T));
+}
+
+} // namespace
+
+RayStats& RayStats::operator+=(const RayStats& o) {
+  eye += o.eye;
+  shadow += o.shadow;
+  reflection += o.reflection;
+  refraction += o.refraction;
+  bailoutSaved += o.bailoutSaved;
+  stackOverflow += o.stackOverflow;
+  refinedPixels += o.refinedPixels;
+  nonFinite += o.nonFinite;
+  maxDepth = std::max(maxDepth, o.maxDepth);
+  return *this;
+}
+
+Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache) : context_(context), cache_(cache) {
+  const auto& device = context.device();
+  vulkan::vulkanStep("creating the renderer's layouts", [&] {
+    std::vector<vk::DescriptorSetLayoutBinding> bindings;
+    for (std::uint32_t b = 0; b < gpu::kBindingCount; ++b) {
+      auto type = b == gpu::kBindingFrame ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
+      bindings.emplace_back(b, type, 1, vk::ShaderStageFlagBits::eCompute);
+    }
+    setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
+    vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::PushConstants));
+    vk::DescriptorSetLayout layouts[] = {*setLayout_};
+    pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, push));
+    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 1),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount)};
+    descriptorPool_ = vk::raii::DescriptorPool(
+        device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
+    vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*descriptorPool_, layouts));
+    descriptorSet_ = std::move(sets.front());
+    timestamps_ = context.info().timestamps && context.timestampValidBits() > 0;
+    if (timestamps_) {
+      queryPool_ = vk::raii::QueryPool(device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 2));
+    }
+  });
+  frameBuffer_ = std::make_unique<vulkan::Buffer>(context, sizeof(gpu::FrameParams), vk::BufferUsageFlagBits::eUniformBuffer,
+                                                  vulkan::MemoryUse::Upload, "frame parameters");
+  stats_ = std::make_unique<vulkan::Buffer>(context, sizeof(gpu::RayStats),
+                                            vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eTransferDst,
+                                            vulkan::MemoryUse::Readback, "ray statistics");
+  gpu::RayStats zero{};
+  stats_->write(&zero, sizeof zero);
+  prevImage_ = std::make_unique<vulkan::Buffer>(context, 16, vk::BufferUsageFlagBits::eStorageBuffer,
+                                                vulkan::MemoryUse::DeviceLocal, "previous image (unused)");
+  sceneBuffers_.resize(gpu::kBindingCount);
+}
+
+Renderer::~Renderer() = default;
+
+void Renderer::setScene(const Scene& scene) {
+  auto start = Clock::now();
+  features_ = analyzeScene(scene, scene.render);
+  // The BVH is built when the scene's own settings would use it, or the user asked for it.
+  gpuScene_ = packScene(scene, scene.camera.position, features_.useBvh);
+  const auto& g = gpuScene_;
+  uploadArray(sceneBuffers_[gpu::kBindingMaterials], context_, g.materials, "materials");
+  uploadArray(sceneBuffers_[gpu::kBindingLights], context_, g.lights, "lights");
+  uploadArray(sceneBuffers_[gpu::kBindingSpheres], context_, g.spheres, "spheres");
+  uploadArray(sceneBuffers_[gpu::kBindingPlanes], context_, g.planes, "planes");
+  uploadArray(sceneBuffers_[gpu::kBindingTriangles], context_, g.triangles, "triangles");
+  uploadArray(sceneBuffers_[gpu::kBindingPolygons], context_, g.polygons, "polygons");
+  uploadArray(sceneBuffers_[gpu::kBindingPolyVertices], context_, g.polyVertices, "polygon vertices");
+  uploadArray(sceneBuffers_[gpu::kBindingNormals], context_, g.normals, "shading normals");
+  uploadArray(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvh.nodes, "BVH nodes");
+  uploadArray(sceneBuffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, "BVH primitive references");
+  uploadMs_ = msSince(start);
+  image_.reset(); // descriptors are rewritten once the image window exists
+}
+
+vulkan::Specialization Renderer::specializationFor(const Features& f, const RenderSettings& s,
+                                                   const RenderOptions& o) const {
+  vulkan::Specialization spec;
+  bool all = !o.specialize;
+  spec.set(gpu::kSpecHasSpheres, all || f.spheres);
+  spec.set(gpu::kSpecHasPlanes, all || f.planes);
+  spec.set(gpu::kSpecHasTriangles, all || f.triangles);
+  spec.set(gpu::kSpecHasPolygons, all || f.polygons);
+  spec.set(gpu::kSpecUseBvh, f.useBvh && !gpuScene_.bvh.nodes.empty());
+  spec.set(gpu::kSpecShadows, all || f.shadows);
+  spec.set(gpu::kSpecReflection, all || f.reflection);
+  spec.set(gpu::kSpecRefraction, all || f.refraction);
+  spec.set(gpu::kSpecStackSize, all ? static_cast<int>(gpu::kMaxStackSize) : f.stackSize);
+  spec.set(gpu::kSpecCountStats, o.countStats);
+  spec.set(gpu::kSpecNumerics, s.numerics == Numerics::Naive ? gpu::kNumericsNaive : gpu::kNumericsRobust);
+  spec.set(gpu::kSpecFresnel, s.fresnel == FresnelMode::Schlick ? gpu::kFresnelSchlick : gpu::kFresnelExact);
+  spec.set(gpu::kSpecShadowMode,
+           s.transmissiveShadows == TransmissiveShadows::Opaque ? gpu::kShadowsOpaque : gpu::kShadowsAttenuated);
+  spec.set(gpu::kSpecChecker, all || f.checker);
+  spec.set(gpu::kSpecSmoothNormals, all || f.smoothNormals);
+  return spec;
+}
+
+const vulkan::ComputePipeline& Renderer::pipelineFor(const vulkan::Specialization& spec, bool& reused) {
+  auto it = pipelines_.find(spec);
+  reused = it != pipelines_.end();
+  if (!reused) {
+    auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kTraceSpv),
+                                                              *pipelineLayout_, spec, cache_ ? &cache_->cache() : nullptr,
+                                                              "trace");
+    it = pipelines_.emplace(spec, std::move(pipeline)).first;
+    if (cache_) cache_->save();
+  }
+  return *it->second;
+}
+
+void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev) {
+  bool rebuild = !image_ || imageWidth_ != width || imageRows_ != rows;
+  if (rebuild) {
+    vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width) * rows * sizeof(glm::vec4);
+    image_ = std::make_unique<vulkan::Buffer>(context_, bytes, vk::BufferUsageFlagBits::eStorageBuffer,
+                                              vulkan::MemoryUse::DeviceLocal, "image");
+    imageWidth_ = width;
+    imageRows_ = rows;
+  }
+  // The refine pass reads the band plus one row above and below.
+  vk::DeviceSize prevBytes = needPrev ? static_cast<vk::DeviceSize>(width) * (rows + 2) * sizeof(glm::vec4) : 16;
+  if (prevImage_->size() < prevBytes) {
+    prevImage_ = std::make_unique<vulkan::Buffer>(context_, prevBytes, vk::BufferUsageFlagBits::eStorageBuffer,
+                                                  vulkan::MemoryUse::DeviceLocal, "previous image");
+    rebuild = true;
+  }
+  if (rebuild) updateDescriptors();
+}
+
+void Renderer::updateDescriptors() {
+  std::vector<vk::DescriptorBufferInfo> infos(gpu::kBindingCount);
+  std::vector<vk::WriteDescriptorSet> writes;
+  for (std::uint32_t b = 0; b < gpu::kBindingCount; ++b) {
+    vk::Buffer handle;
+    if (b == gpu::kBindingFrame) handle = frameBuffer_->handle();
+    else if (b == gpu::kBindingImage) handle = image_->handle();
+    else if (b == gpu::kBindingPrevImage) handle = prevImage_->handle();
+    else if (b == gpu::kBindingStats) handle = stats_->handle();
+    else handle = sceneBuffers_[b]->handle();
+    infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
+    auto type = b == gpu::kBindingFrame ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
+    writes.emplace_back(*descriptorSet_, b, 0, 1, type, nullptr, &infos[b]);
+  }
+  context_.device().updateDescriptorSets(writes, {});
+}
+
+void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, const Features& f) {
+  CameraFrame cam = makeCameraFrame(camera, s.width, s.height);
+  gpu::FrameParams p{};
+  p.cameraForward = glm::vec4(glm::vec3(cam.forward), 0.0f);
+  p.cameraRight = glm::vec4(glm::vec3(cam.right * (cam.tanHalfFovY * cam.aspect)), 0.0f);
+  p.cameraUp = glm::vec4(glm::vec3(cam.up * cam.tanHalfFovY), 0.0f);
+  p.cameraOrigin = glm::vec4(glm::vec3(camera.position - gpuScene_.origin), 0.0f);
+  p.worldOffset = glm::vec4(glm::vec3(gpuScene_.origin), 0.0f);
+  p.background = glm::vec4(glm::vec3(gpuScene_.background), 0.0f);
+  p.ambientLight = glm::vec4(glm::vec3(gpuScene_.ambientLight), 0.0f);
+  p.knobs = glm::vec4(static_cast<float>(s.bailout), static_cast<float>(s.adaptiveThreshold), 0.0f, 0.0f);
+  // Depth beyond what the weights can reach changes nothing; the specialized kernel stops there.
+  p.imageSize = glm::uvec4(s.width, s.height, 0u, static_cast<std::uint32_t>(f.reflection ? f.usableDepth : 0));
+  p.counts = glm::uvec4(gpuScene_.spheres.size(), gpuScene_.planes.size(), gpuScene_.triangles.size(),
+                        gpuScene_.polygons.size());
+  p.counts2 = glm::uvec4(gpuScene_.lights.size(), gpuScene_.bvh.nodes.size(), 0u, 0u);
+  frameBuffer_->write(&p, sizeof p);
+  frameWidth_ = s.width;
+  frameHeight_ = s.height;
+}
+
+void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const gpu::PushConstants& push, bool timestamps) {
+  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, activePipeline_->handle());
+  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
+  cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+  if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *queryPool_, 0);
+  // Round up: the last partial workgroup covers the remaining pixels, the shader bounds-checks.
+  cmd.dispatch((push.tileSize.x + gpu::kWorkgroupSizeX - 1) / gpu::kWorkgroupSizeX,
+               (push.tileSize.y + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY, 1);
+  if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *queryPool_, 1);
+}
+
+RayStats Renderer::readStatsAndReset() {
+  gpu::RayStats raw{};
+  stats_->read(&raw, sizeof raw);
+  gpu::RayStats zero{};
+  stats_->write(&zero, sizeof zero);
+  RayStats s;
+  s.eye = raw.eyeRays;
+  s.shadow = raw.shadowRays;
+  s.reflection = raw.reflectionRays;
+  s.refraction = raw.refractionRays;
+  s.bailoutSaved = raw.bailoutSaved;
+  s.stackOverflow = raw.stackOverflow;
+  s.refinedPixels = raw.refinedPixels;
+  s.nonFinite = raw.nonFinite;
+  s.maxDepth = raw.maxDepth;
+  return s;
+}
+
+RenderResult Renderer::render(const Camera& camera, const RenderSettings& settings, const RenderOptions& options) {
+  RenderResult result;
+  prepare(camera, settings, options);
+  result.features = current_;
+  result.timings.pipelineMs = lastPipelineMs_;
+  result.timings.pipelineReused = lastPipelineMs_ == 0.0;
+
+  const std::uint32_t width = settings.width;
+  const std::uint32_t height = settings.height;
+  result.image = Image(width, height);
+  const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
+  // Bands never exceed the image window; rows come in whole workgroups.
+  const std::uint32_t windowRows = imageRows_;
+
+  // Work units: base pass plus, for adaptive AA, the refine pass (weighted like a base pass).
+  const double totalWork = static_cast<double>(height) * (adaptive ? 2.0 : 1.0);
+  double doneWork = 0.0;
+  auto traceStart = Clock::now();
+  double rowsPerMs = 0.0; // measured speed, drives the band height
+
+  auto runPass = [&](bool refine) {
+    std::uint32_t y = 0;
+    std::uint32_t rows = std::min<std::uint32_t>(height, std::max<std::uint32_t>(8, (65536 / std::max(1u, width) + 7) / 8 * 8));
+    while (y < height) {
+      if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
+      if (rowsPerMs > 0.0) {
+        double want = rowsPerMs * options.bandBudgetMs;
+        rows = static_cast<std::uint32_t>(std::clamp(want, 8.0, static_cast<double>(windowRows)));
+        rows = std::max<std::uint32_t>(8, rows / 8 * 8);
+      }
+      rows = std::min({rows, windowRows, height - y});
+
+      gpu::PushConstants push{};
+      push.tileOrigin = glm::uvec2(0, y);
+      push.tileSize = glm::uvec2(width, rows);
+      push.imageRow0 = y;
+      if (refine) {
+        // Upload the base image for this band plus a row of neighbours above and below.
+        std::uint32_t p0 = y > 0 ? y - 1 : 0;
+        std::uint32_t p1 = std::min(height, y + rows + 1);
+        std::vector<glm::vec4> rowsData(static_cast<std::size_t>(width) * (p1 - p0));
+        for (std::uint32_t r = p0; r < p1; ++r) {
+          for (std::uint32_t x = 0; x < width; ++x) {
+            rowsData[static_cast<std::size_t>(r - p0) * width + x] = glm::vec4(result.image.at(x, r), 1.0f);
+          }
+        }
+        prevImage_->write(rowsData.data(), rowsData.size() * sizeof(glm::vec4));
+        push.pass = gpu::kPassRefine;
+        push.sampleBase = 0;
+        push.sampleCount = static_cast<std::uint32_t>(settings.spp);
+        push.prevRow0 = p0;
+        push.prevRows = p1 - p0;
+      } else {
+        push.pass = gpu::kPassSample;
+        push.sampleBase = 0;
+        push.sampleCount = adaptive ? 1u : static_cast<std::uint32_t>(settings.spp);
+        push.flags = push.sampleCount == 1 ? gpu::kFlagCenterSample : 0u;
+      }
+
+      auto bandStart = Clock::now();
+      std::string step = std::string(refine ? "refining" : "tracing") + " rows " + std::to_string(y) + ".." +
+                         std::to_string(y + rows - 1);
+      try {
+        context_.submitAndWait(step, [&](const vk::raii::CommandBuffer& cmd) {
+          if (timestamps_) cmd.resetQueryPool(*queryPool_, 0, 2);
+          recordDispatch(cmd, push, timestamps_);
+          // Shader writes must be visible to the host's mapped reads (or the readback copy).
+          vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
+                                    vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
+          cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
+                              vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, barrier, {}, {});
+        });
+      } catch (const DeviceLostError& e) {
+        throw DeviceLostError(std::string(e.what()) + " in the band of rows " + std::to_string(y) + ".." +
+                              std::to_string(y + rows - 1));
+      }
+      double bandWallMs = msSince(bandStart);
+      double bandGpuMs = bandWallMs;
+      if (timestamps_) {
+        auto [res, ticks] = queryPool_.getResults<std::uint64_t>(0, 2, 2 * sizeof(std::uint64_t), sizeof(std::uint64_t),
+                                                                 vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
+        if (res == vk::Result::eSuccess && ticks[1] >= ticks[0]) {
+          bandGpuMs = static_cast<double>(ticks[1] - ticks[0]) * context_.timestampPeriodNs() * 1e-6;
+        }
+      }
+      result.timings.traceMs += bandGpuMs;
+      result.timings.traceWallMs += bandWallMs;
+      ++result.timings.bands;
+      if (options.countStats) result.stats += readStatsAndReset();
+      rowsPerMs = static_cast<double>(rows) / std::max(bandGpuMs, 1e-3);
+
+      auto readStart = Clock::now();
+      std::vector<glm::vec4> sums(static_cast<std::size_t>(width) * rows);
+      image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
+      for (std::uint32_t r = 0; r < rows; ++r) {
+        for (std::uint32_t x = 0; x < width; ++x) {
+          const glm::vec4& v = sums[static_cast<std::size_t>(r) * width + x];
+          result.image.at(x, y + r) = v.w > 0.0f ? glm::vec3(v) / v.w : glm::vec3(0.0f);
+        }
+      }
+      result.timings.readbackMs += msSince(readStart);
+
+      y += rows;
+      doneWork += rows;
+      if (options.progress) {
+        RenderProgress p;
+        p.fraction = doneWork / totalWork;
+        p.elapsedMs = msSince(traceStart);
+        p.raysPerSecond = p.elapsedMs > 0 ? static_cast<double>(result.stats.total()) / (p.elapsedMs * 1e-3) : 0.0;
+        p.remainingMs = p.fraction > 0 ? p.elapsedMs * (1.0 - p.fraction) / p.fraction : 0.0;
+        options.progress(p);
+      }
+    }
+  };
+  runPass(false);
+  if (adaptive) runPass(true);
+  return result;
+}
+
+void Renderer::prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options) {
+  if (sceneBuffers_[gpu::kBindingMaterials] == nullptr) throw Error("Renderer::prepare: no scene set");
+  current_ = features_;
+  current_.applySettings(settings);
+  // The BVH exists only if setScene built it; without it the kernel loops over all primitives.
+  current_.useBvh = current_.useBvh && !gpuScene_.bvh.nodes.empty();
+  bool reused = false;
+  auto spec = specializationFor(current_, settings, options);
+  activePipeline_ = &pipelineFor(spec, reused);
+  lastPipelineMs_ = reused ? 0.0 : activePipeline_->creationMs();
+
+  std::uint64_t rowBytes = static_cast<std::uint64_t>(settings.width) * sizeof(glm::vec4);
+  std::uint64_t limit = std::min<std::uint64_t>(context_.info().maxStorageBufferRange, kImageWindowBudget);
+  std::uint64_t rowsFit = limit / rowBytes;
+  const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
+  // The refine pass's window holds two extra rows.
+  if (adaptive && rowsFit > 2) rowsFit -= 2;
+  if (rowsFit < 8 && rowsFit < settings.height) {
+    throw InputError("image.width", "an image " + std::to_string(settings.width) + " pixels wide needs " +
+                                        std::to_string(rowBytes * 8 >> 20) + " MiB per band of 8 rows, more than " +
+                                        context_.info().name + " binds in one storage buffer");
+  }
+  auto rows = static_cast<std::uint32_t>(std::min<std::uint64_t>(rowsFit, settings.height));
+  ensureImageWindow(settings.width, rows, adaptive);
+  writeFrameParams(camera, settings, current_);
+}
+
+void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count,
+                             bool accumulate) {
+  if (imageRows_ < frameHeight_) throw Error("the image does not fit one window; use render() instead");
+  gpu::PushConstants push{};
+  push.tileOrigin = glm::uvec2(0, 0);
+  push.tileSize = glm::uvec2(frameWidth_, frameHeight_);
+  push.pass = gpu::kPassSample;
+  push.sampleBase = sampleBase;
+  push.sampleCount = count;
+  push.flags = accumulate ? gpu::kFlagAccumulate : 0u;
+  recordDispatch(cmd, push, false);
+}
+
+vk::Buffer Renderer::imageBuffer() const { return image_ ? image_->handle() : vk::Buffer(); }
+
+Image Renderer::readImage() const {
+  Image img(frameWidth_, frameHeight_);
+  std::vector<glm::vec4> sums(static_cast<std::size_t>(frameWidth_) * frameHeight_);
+  image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
+  for (std::size_t i = 0; i < sums.size(); ++i) {
+    img.pixels[i] = sums[i].w > 0.0f ? glm::vec3(sums[i]) / sums[i].w : glm::vec3(0.0f);
+  }
+  return img;
+}
+
+RayStats Renderer::takeStats() { return readStatsAndReset(); }
+
+} // namespace vkray

@@ -1,0 +1,142 @@
+// The Renderer: uploads a scene, builds the compute pipeline specialized to what the scene calls
+// for, traces the image in bands whose GPU time is bounded, and reads it back with ray statistics.
+// The headless command and the viewer both drive this one class.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+
+#include <vulkan/vulkan_raii.hpp>
+
+#include "image/image.h"
+#include "render/gpu_scene.h"
+#include "scene/features.h"
+#include "scene/scene.h"
+#include "vk/buffer.h"
+#include "vk/compute_pipeline.h"
+#include "vk/context.h"
+
+namespace vkray {
+
+struct RayStats {
+  std::uint64_t eye = 0;
+  std::uint64_t shadow = 0;
+  std::uint64_t reflection = 0;
+  std::uint64_t refraction = 0;
+  std::uint64_t bailoutSaved = 0;  // branches below the bailout weight, not traced
+  std::uint64_t stackOverflow = 0; // branches dropped because the explicit stack was full
+  std::uint64_t refinedPixels = 0; // adaptive antialiasing: pixels supersampled
+  std::uint64_t nonFinite = 0;     // samples that were NaN/Inf before the guard (expected 0)
+  std::uint32_t maxDepth = 0;      // deepest bounce traced
+
+  std::uint64_t total() const { return eye + shadow + reflection + refraction; }
+  RayStats& operator+=(const RayStats& o);
+};
+
+struct RenderProgress {
+  double fraction = 0.0;     // of all pixel work, 0..1
+  double elapsedMs = 0.0;
+  double raysPerSecond = 0.0; // when statistics are counted, else 0
+  double remainingMs = 0.0;
+};
+
+struct RenderOptions {
+  bool specialize = true;     // false: every feature compiled in (--no-specialize)
+  bool countStats = true;     // ray counters (a specialization; off costs nothing)
+  double bandBudgetMs = 100.0; // target GPU time of one submission (watchdog-safe)
+  std::function<void(const RenderProgress&)> progress;
+  const std::atomic<bool>* cancel = nullptr; // checked between bands
+};
+
+struct RenderTimings {
+  double pipelineMs = 0.0;  // pipeline creation (0 when reused within the process)
+  double traceMs = 0.0;     // GPU time of the trace dispatches (timestamp queries)
+  double traceWallMs = 0.0; // host wall time of the trace submissions
+  double readbackMs = 0.0;
+  int bands = 0;
+  bool pipelineReused = false;
+};
+
+struct RenderResult {
+  Image image;
+  RayStats stats;
+  RenderTimings timings;
+  Features features;
+};
+
+class Renderer {
+ public:
+  // cache may be null (no on-disk pipeline cache).
+  Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache);
+  ~Renderer();
+  Renderer(const Renderer&) = delete;
+  Renderer& operator=(const Renderer&) = delete;
+
+  // Packs the scene relative to its camera position and uploads it. bvh decides whether a BVH is
+  // built (Auto: when the scene has enough bounded primitives).
+  void setScene(const Scene& scene);
+  double uploadMs() const { return uploadMs_; }
+  double bvhBuildMs() const { return gpuScene_.bvh.stats.buildMs; }
+  const GpuScene& gpuScene() const { return gpuScene_; }
+  const Features& sceneFeatures() const { return features_; }
+
+  // Headless: the whole image, in bands, read back and averaged.
+  RenderResult render(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
+
+  // Progressive use (the viewer). prepare() sizes the image buffer to hold the whole image, builds
+  // or reuses the pipeline and updates the frame parameters; recordSamples() records one dispatch
+  // adding `count` samples per pixel (sample indices base, base + 1, ...) to the image sums.
+  void prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
+  void recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count,
+                     bool accumulate);
+  vk::Buffer imageBuffer() const;  // vec4(sum rgb, samples) per pixel, row-major
+  Image readImage() const;         // averages of the sums (after the recorded work completed)
+  RayStats takeStats();            // reads and zeroes the counters
+  const Features& currentFeatures() const { return current_; }
+  double lastPipelineMs() const { return lastPipelineMs_; }
+
+ private:
+  struct PipelineKey;
+  vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o) const;
+  const vulkan::ComputePipeline& pipelineFor(const vulkan::Specialization& spec, bool& reused);
+  void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
+  void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
+  void updateDescriptors();
+  void recordDispatch(const vk::raii::CommandBuffer& cmd, const gpu::PushConstants& push, bool timestamps);
+  RayStats readStatsAndReset();
+
+  const vulkan::Context& context_;
+  vulkan::PipelineCache* cache_;
+
+  // Layouts first: pipelines and descriptor sets built from them are declared (and destroyed) after.
+  vk::raii::DescriptorSetLayout setLayout_{nullptr};
+  vk::raii::PipelineLayout pipelineLayout_{nullptr};
+  vk::raii::DescriptorPool descriptorPool_{nullptr};
+  vk::raii::DescriptorSet descriptorSet_{nullptr};
+  vk::raii::QueryPool queryPool_{nullptr};
+  std::map<vulkan::Specialization, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
+  const vulkan::ComputePipeline* activePipeline_ = nullptr;
+
+  GpuScene gpuScene_;
+  Features features_; // scene facts; settings applied per render into current_
+  Features current_;
+  std::unique_ptr<vulkan::Buffer> frameBuffer_;
+  std::vector<std::unique_ptr<vulkan::Buffer>> sceneBuffers_; // indexed by binding
+  std::unique_ptr<vulkan::Buffer> image_;     // window of imageRows_ rows
+  std::unique_ptr<vulkan::Buffer> prevImage_; // refine pass input (or a 16-byte placeholder)
+  std::unique_ptr<vulkan::Buffer> stats_;
+  std::uint32_t imageWidth_ = 0;
+  std::uint32_t imageRows_ = 0;
+  std::uint32_t frameWidth_ = 0;
+  std::uint32_t frameHeight_ = 0;
+  double uploadMs_ = 0.0;
+  double lastPipelineMs_ = 0.0;
+  bool timestamps_ = false;
+};
+
+} // namespace vkray

@@ -1,0 +1,56 @@
+// Scene analysis: which effects and primitive kinds a scene actually calls for, so the renderer can
+// specialize its kernel to them and trace nothing the image cannot show.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "scene/scene.h"
+
+namespace vkray {
+
+struct Features {
+  // Primitive kinds present.
+  bool spheres = false;
+  bool planes = false;
+  bool triangles = false;
+  bool polygons = false;
+  bool smoothNormals = false; // some triangle carries shading normals
+  bool checker = false;       // some material has a checker
+
+  // Shadows: lights that ask for them, and whether anything could block them at all (a single
+  // convex object cannot shadow itself: lights behind a surface are skipped before any ray).
+  int lights = 0;
+  int shadowLights = 0;
+  bool occluderPossible = false;
+  bool shadows = false;
+
+  // Secondary rays: reflection covers mirrors and the reflected half of dielectrics.
+  bool reflection = false;
+  bool refraction = false;
+  int requestedDepth = 0; // max_depth asked for
+  int usableDepth = 0;    // deepest bounce whose weight can reach the bailout (<= requestedDepth)
+  double maxBranchWeight = 0.0; // largest per-bounce weight factor (reflection + transmission)
+  int stackSize = 1;      // pending branches the kernel must hold (refraction only)
+  bool stackTruncated = false; // usableDepth > kMaxStackSize: extra branches will be dropped
+
+  bool useBvh = false;
+  std::size_t boundedPrimitives = 0;
+
+  // Facts about the scene alone, kept so settings can be re-applied (the viewer changes them live).
+  bool anyReflectiveMaterial = false;
+  bool anyTransmissiveMaterial = false;
+
+  // One line per aspect, in words: "shadows: on (2 lights)".
+  std::vector<std::string> explain() const;
+
+  // Recomputes everything that depends on the settings (depth, bailout, BVH mode).
+  void applySettings(const RenderSettings& settings);
+};
+
+// Bounded primitives at which BvhMode::Auto switches from brute force to the BVH.
+inline constexpr std::size_t kBvhAutoThreshold = 12;
+
+Features analyzeScene(const Scene& scene, const RenderSettings& settings);
+
+} // namespace vkray

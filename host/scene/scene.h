@@ -1,0 +1,124 @@
+// The scene model: plain C++ values in double precision, as read from the scene file. Nothing here
+// knows about JSON or Vulkan; the loader fills it, Features analyses it, GpuScene packs it.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+namespace vkray {
+
+// Right-handed, as glTF: a camera at the origin looking down -z with up +y sees +x on the right.
+struct Camera {
+  glm::dvec3 position{0.0, 0.0, 5.0};
+  glm::dvec3 lookAt{0.0, 0.0, 0.0};
+  glm::dvec3 up{0.0, 1.0, 0.0};
+  double fovY = 45.0; // degrees, vertical
+};
+
+enum class Numerics { Robust, Naive };
+enum class FresnelMode { Exact, Schlick };
+enum class TransmissiveShadows { Attenuated, Opaque };
+enum class Antialiasing { Stratified, Adaptive };
+enum class BvhMode { Auto, On, Off };
+
+// Accuracy knobs; every one can also be set on the command line.
+struct RenderSettings {
+  std::uint32_t width = 800;
+  std::uint32_t height = 600;
+  int maxDepth = 5;               // reflection/refraction bounces after the eye ray
+  int spp = 1;                    // samples per pixel
+  double bailout = 1.0 / 255.0;   // branches with weight below this are not traced (0: off)
+  Antialiasing antialiasing = Antialiasing::Stratified;
+  double adaptiveThreshold = 0.1; // adaptive AA: max channel difference to a neighbour
+  Numerics numerics = Numerics::Robust;
+  FresnelMode fresnel = FresnelMode::Exact;
+  TransmissiveShadows transmissiveShadows = TransmissiveShadows::Attenuated;
+  BvhMode bvh = BvhMode::Auto;
+};
+
+struct Checker {
+  glm::dvec3 color2{0.0};
+  double scale = 1.0; // side of a square, world units
+};
+
+struct Material {
+  std::string name;
+  glm::dvec3 color{0.8};      // linear RGB
+  double ambient = 0.1;
+  double diffuse = 0.6;
+  double specular = 0.0;
+  double shininess = 40.0;    // Phong exponent
+  double reflection = 0.0;    // 0..1
+  double transmission = 0.0;  // 0..1
+  double ior = 1.5;
+  glm::dvec3 absorption{0.0}; // Beer-Lambert coefficient per unit length
+  std::optional<Checker> checker;
+};
+
+struct PointLight {
+  glm::dvec3 position{0.0};
+  glm::dvec3 color{1.0};
+  bool shadows = true;
+};
+
+struct Sphere {
+  glm::dvec3 center{0.0};
+  double radius = 1.0;
+  std::uint32_t material = 0;
+};
+
+// n.x + D = 0 with |n| = 1 (the loader normalises n and scales D with it).
+struct Plane {
+  glm::dvec3 normal{0.0, 1.0, 0.0};
+  double offset = 0.0;
+  std::uint32_t material = 0;
+};
+
+// Planar, convex, counter-clockwise or clockwise; 3 or more vertices.
+struct Polygon {
+  std::vector<glm::dvec3> vertices;
+  glm::dvec3 normal{0.0}; // unit, from the vertex winding (Newell's method)
+  std::uint32_t material = 0;
+};
+
+struct Triangle {
+  glm::dvec3 v[3];
+  std::optional<std::array<glm::dvec3, 3>> normals; // per-vertex shading normals, unit
+  std::uint32_t material = 0;
+};
+
+// Where a mesh's triangles came from, for --stats and error messages.
+struct MeshInfo {
+  std::string file;
+  std::size_t firstTriangle = 0;
+  std::size_t triangleCount = 0;
+  std::size_t droppedDegenerate = 0;
+};
+
+struct Scene {
+  std::filesystem::path path; // file it was loaded from (for messages and relative mesh paths)
+  Camera camera;
+  RenderSettings render;
+  glm::dvec3 background{0.0};
+  glm::dvec3 ambientLight{0.0};
+  std::vector<Material> materials;
+  std::vector<PointLight> lights;
+  std::vector<Sphere> spheres;
+  std::vector<Plane> planes;
+  std::vector<Polygon> polygons;
+  std::vector<Triangle> triangles;
+  std::vector<MeshInfo> meshes;
+
+  std::size_t boundedPrimitiveCount() const {
+    return spheres.size() + polygons.size() + triangles.size();
+  }
+  std::size_t objectCount() const { return boundedPrimitiveCount() + planes.size(); }
+};
+
+} // namespace vkray

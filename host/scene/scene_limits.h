@@ -1,0 +1,19 @@
+// Caps on what a scene may ask for. Each is checked where the value is read, with a message that
+// states the cap; docs/scene-format.md lists them.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "../../shaders/shared/gpu_types.h"
+
+namespace vkray {
+
+inline constexpr long long kMaxImageSide = 16384;    // pixels, width and height
+inline constexpr long long kMaxDepthLimit = 64;      // max_depth
+inline constexpr long long kMaxSpp = 4096;           // samples per pixel
+inline constexpr std::size_t kMaxPolygonVertices = 64;
+inline constexpr std::size_t kMaxPrimitives = 1u << 24;
+inline constexpr std::size_t kMaxMaterialCount = gpu::kMaxMaterials;
+
+} // namespace vkray

@@ -1,0 +1,349 @@
+// Scene file -> Scene. One function per JSON section; each validates what it reads.
+#include "scene/scene_loader.h"
+
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include "scene/json_reader.h"
+#include "scene/scene_limits.h"
+#include "util/error.h"
+
+namespace vkray {
+
+namespace {
+
+using glm::dvec3;
+
+struct LoadContext {
+  Scene& scene;
+  std::map<std::string, std::uint32_t> materialIds;
+  std::filesystem::path baseDir;
+};
+
+void readCamera(const JsonNode& node, Camera& camera) {
+  node.allowKeys({"position", "look_at", "up", "fov_y"});
+  camera.position = node.at("position").vec3();
+  camera.lookAt = node.at("look_at").vec3();
+  if (auto up = node.find("up")) camera.up = up->nonZeroVec3();
+  if (auto fov = node.find("fov_y")) {
+    camera.fovY = fov->number();
+    if (!(camera.fovY > 0.0 && camera.fovY < 180.0)) {
+      fov->fail("must be in (0, 180) degrees, got " + formatNumber(camera.fovY));
+    }
+  }
+  if (glm::length(camera.lookAt - camera.position) == 0.0) {
+    node.at("look_at").fail("must differ from camera.position");
+  }
+}
+
+void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sawAmbient) {
+  node.allowKeys({"width", "height", "background", "ambient"});
+  if (auto w = node.find("width")) scene.render.width = static_cast<std::uint32_t>(w->integer(1, kMaxImageSide));
+  if (auto h = node.find("height")) scene.render.height = static_cast<std::uint32_t>(h->integer(1, kMaxImageSide));
+  if (auto bg = node.find("background")) {
+    scene.background = bg->color();
+    sawBackground = true;
+  }
+  if (auto amb = node.find("ambient")) {
+    scene.ambientLight = amb->color();
+    sawAmbient = true;
+  }
+}
+
+void readRender(const JsonNode& node, RenderSettings& r) {
+  node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics",
+                  "fresnel", "transmissive_shadows", "bvh"});
+  if (auto v = node.find("max_depth")) r.maxDepth = static_cast<int>(v->integer(0, kMaxDepthLimit));
+  if (auto v = node.find("spp")) r.spp = static_cast<int>(v->integer(1, kMaxSpp));
+  if (auto v = node.find("bailout")) r.bailout = v->number(0.0, 1.0);
+  if (auto v = node.find("antialiasing")) {
+    r.antialiasing = v->choice({"stratified", "adaptive"}) == "adaptive" ? Antialiasing::Adaptive
+                                                                        : Antialiasing::Stratified;
+  }
+  if (auto v = node.find("adaptive_threshold")) r.adaptiveThreshold = v->number(0.0, 1.0);
+  if (auto v = node.find("numerics")) {
+    r.numerics = v->choice({"robust", "naive"}) == "naive" ? Numerics::Naive : Numerics::Robust;
+  }
+  if (auto v = node.find("fresnel")) {
+    r.fresnel = v->choice({"exact", "schlick"}) == "schlick" ? FresnelMode::Schlick : FresnelMode::Exact;
+  }
+  if (auto v = node.find("transmissive_shadows")) {
+    r.transmissiveShadows = v->choice({"attenuated", "opaque"}) == "opaque"
+                                ? TransmissiveShadows::Opaque
+                                : TransmissiveShadows::Attenuated;
+  }
+  if (auto v = node.find("bvh")) {
+    std::string mode = v->choice({"auto", "on", "off"});
+    r.bvh = mode == "on" ? BvhMode::On : mode == "off" ? BvhMode::Off : BvhMode::Auto;
+  }
+}
+
+Material readMaterial(const JsonNode& node, const std::string& name) {
+  node.allowKeys({"color", "ambient", "diffuse", "specular", "shininess", "reflection", "transmission",
+                  "ior", "absorption", "checker"});
+  Material m;
+  m.name = name;
+  if (auto v = node.find("color")) m.color = v->color();
+  if (auto v = node.find("ambient")) m.ambient = v->number(0.0, 1e6);
+  if (auto v = node.find("diffuse")) m.diffuse = v->number(0.0, 1e6);
+  if (auto v = node.find("specular")) m.specular = v->number(0.0, 1e6);
+  if (auto v = node.find("shininess")) m.shininess = v->number(0.0, 1e6);
+  if (auto v = node.find("reflection")) m.reflection = v->number(0.0, 1.0);
+  if (auto v = node.find("transmission")) m.transmission = v->number(0.0, 1.0);
+  if (auto v = node.find("ior")) {
+    m.ior = v->number();
+    if (!(m.ior >= 0.01 && m.ior <= 100.0)) v->fail("must be in [0.01, 100], got " + formatNumber(m.ior));
+  }
+  if (auto v = node.find("absorption")) m.absorption = v->color();
+  if (m.reflection + m.transmission > 1.0 + 1e-12) {
+    node.at("transmission").fail("reflection + transmission must be <= 1 (energy), got " +
+                                 formatNumber(m.reflection + m.transmission));
+  }
+  if (auto c = node.find("checker")) {
+    c->allowKeys({"color2", "scale"});
+    Checker checker;
+    checker.color2 = c->at("color2").color();
+    if (auto s = c->find("scale")) checker.scale = s->positive();
+    m.checker = checker;
+  }
+  return m;
+}
+
+void readMaterials(const JsonNode& node, LoadContext& ctx) {
+  for (auto& [name, value] : node.members()) {
+    if (name.empty()) value.fail("material names must not be empty");
+    ctx.materialIds[name] = static_cast<std::uint32_t>(ctx.scene.materials.size());
+    ctx.scene.materials.push_back(readMaterial(value, name));
+  }
+}
+
+std::uint32_t defaultMaterial(LoadContext& ctx) {
+  auto it = ctx.materialIds.find("");
+  if (it != ctx.materialIds.end()) return it->second;
+  Material m;
+  m.name = "(default)";
+  auto id = static_cast<std::uint32_t>(ctx.scene.materials.size());
+  ctx.scene.materials.push_back(m);
+  ctx.materialIds[""] = id;
+  return id;
+}
+
+// An object's material: a name from "materials", an inline material object, or the default grey.
+std::uint32_t readObjectMaterial(const JsonNode& object, LoadContext& ctx) {
+  auto node = object.find("material");
+  if (!node) return defaultMaterial(ctx);
+  if (node->isObject()) {
+    auto id = static_cast<std::uint32_t>(ctx.scene.materials.size());
+    ctx.scene.materials.push_back(readMaterial(*node, object.path() + ".material"));
+    return id;
+  }
+  std::string name = node->string();
+  auto it = ctx.materialIds.find(name);
+  if (it == ctx.materialIds.end() || name.empty()) {
+    std::string known;
+    for (auto& [k, v] : ctx.materialIds) {
+      if (!k.empty()) known += (known.empty() ? "" : ", ") + k;
+    }
+    node->fail("unknown material '" + name + "'" + (known.empty() ? " (no materials defined)" : " (known: " + known + ")"));
+  }
+  return it->second;
+}
+
+void readLights(const JsonNode& node, Scene& scene) {
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    JsonNode l = node[i];
+    l.allowKeys({"type", "position", "color", "shadows"});
+    if (auto t = l.find("type")) t->choice({"point"});
+    PointLight light;
+    light.position = l.at("position").vec3();
+    if (auto c = l.find("color")) light.color = c->color();
+    if (auto s = l.find("shadows")) light.shadows = s->boolean();
+    scene.lights.push_back(light);
+  }
+}
+
+// Newell's method: a robust normal for a (nearly) planar polygon, length = twice its area.
+dvec3 newellNormal(const std::vector<dvec3>& v) {
+  dvec3 n(0.0);
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    const dvec3& a = v[i];
+    const dvec3& b = v[(i + 1) % v.size()];
+    n.x += (a.y - b.y) * (a.z + b.z);
+    n.y += (a.z - b.z) * (a.x + b.x);
+    n.z += (a.x - b.x) * (a.y + b.y);
+  }
+  return n;
+}
+
+void readPolygon(const JsonNode& obj, LoadContext& ctx) {
+  obj.allowKeys({"type", "vertices", "material"});
+  JsonNode verts = obj.at("vertices");
+  verts.expectArray();
+  if (verts.size() < 3) verts.fail("a polygon needs at least 3 vertices, got " + std::to_string(verts.size()));
+  if (verts.size() > kMaxPolygonVertices) {
+    verts.fail("at most " + std::to_string(kMaxPolygonVertices) + " vertices, got " + std::to_string(verts.size()));
+  }
+  Polygon poly;
+  for (std::size_t i = 0; i < verts.size(); ++i) poly.vertices.push_back(verts[i].vec3());
+  const auto& v = poly.vertices;
+  double extent = 0.0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    double edge = glm::length(v[(i + 1) % v.size()] - v[i]);
+    if (edge == 0.0) {
+      verts[(i + 1) % v.size()].fail("repeats the previous vertex (zero-length edge)");
+    }
+    extent = std::max(extent, edge);
+  }
+  dvec3 n = newellNormal(v);
+  double len = glm::length(n);
+  if (!(len > 1e-12 * extent * extent)) verts.fail("is degenerate: its vertices are collinear");
+  n /= len;
+  // Planarity: every vertex within a relative 1e-6 of the plane through their centroid.
+  dvec3 centroid(0.0);
+  for (auto& p : v) centroid += p;
+  centroid /= static_cast<double>(v.size());
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    double d = std::abs(glm::dot(n, v[i] - centroid));
+    if (d > 1e-6 * extent) {
+      verts.fail("is not planar: vertex " + std::to_string(i) + " is " + formatNumber(d) +
+                 " off the polygon's plane");
+    }
+  }
+  // Convexity: every turn the same way round the normal, and one full turn in total (a star
+  // pentagram turns the same way everywhere but twice around).
+  double turning = 0.0;
+  for (std::size_t i = 0; i < v.size(); ++i) {
+    dvec3 e0 = v[(i + 1) % v.size()] - v[i];
+    dvec3 e1 = v[(i + 2) % v.size()] - v[(i + 1) % v.size()];
+    double cross = glm::dot(glm::cross(e0, e1), n);
+    if (cross < -1e-9 * glm::length(e0) * glm::length(e1)) {
+      verts.fail("is not convex: it turns the other way at vertex " + std::to_string((i + 1) % v.size()));
+    }
+    turning += std::atan2(cross, glm::dot(e0, e1));
+  }
+  if (std::abs(turning - 2.0 * M_PI) > 1e-3) verts.fail("is not convex: its edges cross each other");
+  poly.normal = n;
+  poly.material = readObjectMaterial(obj, ctx);
+  ctx.scene.polygons.push_back(std::move(poly));
+}
+
+void readTriangle(const JsonNode& obj, LoadContext& ctx) {
+  obj.allowKeys({"type", "vertices", "normals", "material"});
+  JsonNode verts = obj.at("vertices");
+  verts.expectArray();
+  if (verts.size() != 3) verts.fail("a triangle needs exactly 3 vertices, got " + std::to_string(verts.size()));
+  Triangle tri;
+  for (std::size_t i = 0; i < 3; ++i) tri.v[i] = verts[i].vec3();
+  dvec3 n = glm::cross(tri.v[1] - tri.v[0], tri.v[2] - tri.v[0]);
+  if (glm::length(n) == 0.0) verts.fail("is degenerate (zero area)");
+  if (auto normals = obj.find("normals")) {
+    normals->expectArray();
+    if (normals->size() != 3) normals->fail("needs exactly 3 normals, got " + std::to_string(normals->size()));
+    std::array<dvec3, 3> ns;
+    for (std::size_t i = 0; i < 3; ++i) ns[i] = glm::normalize((*normals)[i].nonZeroVec3());
+    tri.normals = ns;
+  }
+  tri.material = readObjectMaterial(obj, ctx);
+  ctx.scene.triangles.push_back(tri);
+}
+
+void readObjects(const JsonNode& node, LoadContext& ctx) {
+  for (std::size_t i = 0; i < node.size(); ++i) {
+    JsonNode obj = node[i];
+    obj.expectObject();
+    std::string type = obj.at("type").choice({"sphere", "plane", "polygon", "triangle"});
+    if (type == "sphere") {
+      obj.allowKeys({"type", "center", "radius", "material"});
+      Sphere s;
+      s.center = obj.at("center").vec3();
+      s.radius = obj.at("radius").positive();
+      s.material = readObjectMaterial(obj, ctx);
+      ctx.scene.spheres.push_back(s);
+    } else if (type == "plane") {
+      obj.allowKeys({"type", "normal", "offset", "point", "material"});
+      Plane p;
+      dvec3 n = obj.at("normal").nonZeroVec3();
+      double len = glm::length(n);
+      p.normal = n / len;
+      if (obj.find("offset") && obj.find("point")) obj.fail("give either 'offset' or 'point', not both");
+      if (auto d = obj.find("offset")) p.offset = d->number() / len;
+      if (auto pt = obj.find("point")) p.offset = -glm::dot(p.normal, pt->vec3());
+      p.material = readObjectMaterial(obj, ctx);
+      ctx.scene.planes.push_back(p);
+    } else if (type == "polygon") {
+      readPolygon(obj, ctx);
+    } else if (type == "triangle") {
+      readTriangle(obj, ctx);
+    }
+    if (ctx.scene.objectCount() > kMaxPrimitives) {
+      obj.fail("too many primitives: more than " + std::to_string(kMaxPrimitives));
+    }
+  }
+}
+
+Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::filesystem::path& baseDir) {
+  Scene scene;
+  LoadContext ctx{scene, {}, baseDir};
+  JsonNode root(doc, "", name);
+  root.expectObject();
+  root.allowKeys({"description", "camera", "image", "background", "ambient", "render", "materials",
+                  "lights", "objects"});
+  if (auto d = root.find("description")) d->string();
+  readCamera(root.at("camera"), scene.camera);
+  bool sawBackground = false;
+  bool sawAmbient = false;
+  if (auto img = root.find("image")) readImage(*img, scene, sawBackground, sawAmbient);
+  if (auto bg = root.find("background")) {
+    if (sawBackground) bg->fail("given twice (also as image.background)");
+    scene.background = bg->color();
+  }
+  if (auto amb = root.find("ambient")) {
+    if (sawAmbient) amb->fail("given twice (also as image.ambient)");
+    scene.ambientLight = amb->color();
+  }
+  if (auto r = root.find("render")) readRender(*r, scene.render);
+  if (auto m = root.find("materials")) readMaterials(*m, ctx);
+  if (auto l = root.find("lights")) readLights(*l, scene);
+  if (auto o = root.find("objects")) readObjects(*o, ctx);
+  if (scene.materials.size() > kMaxMaterialCount) {
+    root.at("materials").fail("too many materials: " + std::to_string(scene.materials.size()) +
+                              " (at most " + std::to_string(kMaxMaterialCount) + ")");
+  }
+  return scene;
+}
+
+} // namespace
+
+Scene loadSceneFromString(const std::string& text, const std::string& name, const std::filesystem::path& baseDir) {
+  if (text.size() > kMaxSceneFileBytes) {
+    throw InputError(name, "file too large to be a scene (" + std::to_string(text.size()) + " bytes; at most " +
+                               std::to_string(kMaxSceneFileBytes) + ")");
+  }
+  nlohmann::json doc = parseJsonText(text, name);
+  Scene scene = buildScene(doc, name, baseDir);
+  scene.path = name;
+  return scene;
+}
+
+Scene loadScene(const std::filesystem::path& path) {
+  std::error_code ec;
+  auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) throw InputError(path.string(), "no such file");
+  if (std::filesystem::is_directory(status)) throw InputError(path.string(), "is a directory, not a scene file");
+  auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxSceneFileBytes) {
+    throw InputError(path.string(), "file too large to be a scene (" + std::to_string(size) + " bytes; at most " +
+                                        std::to_string(kMaxSceneFileBytes) + ")");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path.string(), "cannot open for reading");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  Scene scene = loadSceneFromString(ss.str(), path.string(), path.parent_path());
+  scene.path = path;
+  return scene;
+}
+
+} // namespace vkray

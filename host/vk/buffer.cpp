@@ -1,0 +1,113 @@
+// Buffer creation, memory-type choice, and staged transfers.
+#include "vk/buffer.h"
+
+#include <cstring>
+#include <optional>
+
+#include "util/error.h"
+#include "vk/context.h"
+
+namespace vkray::vulkan {
+
+namespace {
+
+std::optional<std::uint32_t> findMemoryType(const vk::PhysicalDeviceMemoryProperties& props, std::uint32_t typeBits,
+                                            vk::MemoryPropertyFlags want) {
+  for (std::uint32_t i = 0; i < props.memoryTypeCount; ++i) {
+    if ((typeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) return i;
+  }
+  return std::nullopt;
+}
+
+std::string mib(vk::DeviceSize bytes) {
+  return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB";
+}
+
+} // namespace
+
+Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use, std::string name)
+    : context_(&context), name_(std::move(name)), size_(size == 0 ? 16 : size) {
+  const DeviceInfo& info = context.info();
+  if ((usage & vk::BufferUsageFlagBits::eStorageBuffer) && size_ > info.maxStorageBufferRange) {
+    throw DeviceError(name_ + " needs " + mib(size_) + " but " + info.name + " binds at most " +
+                      mib(info.maxStorageBufferRange) + " per storage buffer (maxStorageBufferRange)");
+  }
+  if (info.maxMemoryAllocationSize && size_ > info.maxMemoryAllocationSize) {
+    throw DeviceError(name_ + " needs " + mib(size_) + " but " + info.name + " allocates at most " +
+                      mib(info.maxMemoryAllocationSize) + " at once (maxMemoryAllocationSize)");
+  }
+  if (use == MemoryUse::DeviceLocal) usage |= vk::BufferUsageFlagBits::eTransferDst | vk::BufferUsageFlagBits::eTransferSrc;
+  const std::string step = "creating buffer '" + name_ + "'";
+  vulkanStep(step, [&] {
+    const auto& device = context.device();
+    buffer_ = vk::raii::Buffer(device, vk::BufferCreateInfo({}, size_, usage, vk::SharingMode::eExclusive));
+    auto req = buffer_.getMemoryRequirements();
+    auto props = context.physicalDevice().getMemoryProperties();
+    using MP = vk::MemoryPropertyFlagBits;
+    std::optional<std::uint32_t> type;
+    switch (use) {
+    case MemoryUse::DeviceLocal:
+      type = findMemoryType(props, req.memoryTypeBits, MP::eDeviceLocal | MP::eHostVisible | MP::eHostCoherent);
+      if (!type) type = findMemoryType(props, req.memoryTypeBits, MP::eDeviceLocal);
+      break;
+    case MemoryUse::Upload:
+      type = findMemoryType(props, req.memoryTypeBits, MP::eHostVisible | MP::eHostCoherent);
+      break;
+    case MemoryUse::Readback:
+      type = findMemoryType(props, req.memoryTypeBits, MP::eHostVisible | MP::eHostCached);
+      if (!type) type = findMemoryType(props, req.memoryTypeBits, MP::eHostVisible | MP::eHostCoherent);
+      break;
+    }
+    if (!type) type = findMemoryType(props, req.memoryTypeBits, {});
+    if (!type) throw DeviceError(step + ": no memory type fits");
+    auto flags = props.memoryTypes[*type].propertyFlags;
+    coherent_ = static_cast<bool>(flags & MP::eHostCoherent);
+    memory_ = vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(req.size, *type));
+    buffer_.bindMemory(*memory_, 0);
+    if (flags & MP::eHostVisible) mapped_ = memory_.mapMemory(0, VK_WHOLE_SIZE);
+  });
+}
+
+Buffer::~Buffer() {
+  if (mapped_ && *memory_) memory_.unmapMemory();
+}
+
+void Buffer::write(const void* data, vk::DeviceSize bytes, vk::DeviceSize offset) {
+  if (bytes == 0) return;
+  if (offset + bytes > size_) throw DeviceError("write past the end of buffer '" + name_ + "'");
+  if (mapped_) {
+    std::memcpy(static_cast<char*>(mapped_) + offset, data, bytes);
+    if (!coherent_) {
+      vulkanStep("flushing '" + name_ + "'", [&] {
+        context_->device().flushMappedMemoryRanges(vk::MappedMemoryRange(*memory_, 0, VK_WHOLE_SIZE));
+      });
+    }
+    return;
+  }
+  Buffer staging(*context_, bytes, vk::BufferUsageFlagBits::eTransferSrc, MemoryUse::Upload, name_ + " (staging)");
+  staging.write(data, bytes);
+  context_->submitAndWait("uploading '" + name_ + "'", [&](const vk::raii::CommandBuffer& cmd) {
+    cmd.copyBuffer(staging.handle(), *buffer_, vk::BufferCopy(0, offset, bytes));
+  });
+}
+
+void Buffer::read(void* out, vk::DeviceSize bytes, vk::DeviceSize offset) const {
+  if (bytes == 0) return;
+  if (offset + bytes > size_) throw DeviceError("read past the end of buffer '" + name_ + "'");
+  if (mapped_) {
+    if (!coherent_) {
+      vulkanStep("invalidating '" + name_ + "'", [&] {
+        context_->device().invalidateMappedMemoryRanges(vk::MappedMemoryRange(*memory_, 0, VK_WHOLE_SIZE));
+      });
+    }
+    std::memcpy(out, static_cast<const char*>(mapped_) + offset, bytes);
+    return;
+  }
+  Buffer staging(*context_, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryUse::Readback, name_ + " (readback)");
+  context_->submitAndWait("reading back '" + name_ + "'", [&](const vk::raii::CommandBuffer& cmd) {
+    cmd.copyBuffer(*buffer_, staging.handle(), vk::BufferCopy(offset, 0, bytes));
+  });
+  staging.read(out, bytes);
+}
+
+} // namespace vkray::vulkan

@@ -1,0 +1,50 @@
+// A buffer and its memory, owned together. DeviceLocal buffers are written and read through a
+// staging copy when the device cannot map them; on unified-memory devices (lavapipe) they map.
+#pragma once
+
+#include <cstddef>
+#include <string>
+#include <string_view>
+
+#include <vulkan/vulkan_raii.hpp>
+
+namespace vkray::vulkan {
+
+class Context;
+
+enum class MemoryUse {
+  DeviceLocal, // fastest for the GPU; mapped directly when the device allows it
+  Upload,      // host-visible, written by the CPU
+  Readback,    // host-visible and cached where possible, read by the CPU
+};
+
+class Buffer {
+ public:
+  // size 0 is rounded up (Vulkan forbids empty buffers). A storage buffer larger than the device's
+  // maxStorageBufferRange throws, naming the limit.
+  Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use,
+         std::string name);
+  Buffer(Buffer&&) noexcept = default;
+  Buffer& operator=(Buffer&&) noexcept = default;
+  ~Buffer();
+
+  vk::Buffer handle() const { return *buffer_; }
+  vk::DeviceSize size() const { return size_; }
+  const std::string& name() const { return name_; }
+  bool mapped() const { return mapped_ != nullptr; }
+
+  void write(const void* data, vk::DeviceSize bytes, vk::DeviceSize offset = 0);
+  void read(void* out, vk::DeviceSize bytes, vk::DeviceSize offset = 0) const;
+
+ private:
+  const Context* context_;
+  std::string name_;
+  vk::DeviceSize size_ = 0;
+  bool coherent_ = true;
+  // Memory outlives the buffer bound to it: declared first, destroyed last.
+  vk::raii::DeviceMemory memory_{nullptr};
+  vk::raii::Buffer buffer_{nullptr};
+  void* mapped_ = nullptr;
+};
+
+} // namespace vkray::vulkan

@@ -1,0 +1,106 @@
+// Compute pipelines with specialization, and the persistent pipeline cache.
+#include "vk/compute_pipeline.h"
+
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
+#include <vector>
+
+#include <unistd.h>
+
+#include "vk/context.h"
+
+namespace vkray::vulkan {
+
+ComputePipeline::ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv, vk::PipelineLayout layout,
+                                 const Specialization& specialization, const vk::raii::PipelineCache* cache,
+                                 const std::string& name) {
+  auto start = std::chrono::steady_clock::now();
+  std::vector<vk::SpecializationMapEntry> entries;
+  std::vector<std::uint32_t> data;
+  for (const auto& [id, value] : specialization.values()) {
+    entries.emplace_back(id, static_cast<std::uint32_t>(data.size() * sizeof(std::uint32_t)), sizeof(std::uint32_t));
+    data.push_back(value);
+  }
+  vk::SpecializationInfo specInfo(entries, vk::ArrayProxyNoTemporaries<const std::uint32_t>(data));
+  vulkanStep("creating pipeline '" + name + "'", [&] {
+    vk::raii::ShaderModule module(context.device(), vk::ShaderModuleCreateInfo({}, spirv.size_bytes(), spirv.data()));
+    vk::PipelineShaderStageCreateInfo stage({}, vk::ShaderStageFlagBits::eCompute, *module, "main", &specInfo);
+    vk::ComputePipelineCreateInfo info({}, stage, layout);
+    pipeline_ = cache ? vk::raii::Pipeline(context.device(), *cache, info)
+                      : vk::raii::Pipeline(context.device(), nullptr, info);
+  });
+  creationMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+namespace {
+
+std::vector<char> readAll(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) return {};
+  return std::vector<char>(std::istreambuf_iterator<char>(in), {});
+}
+
+} // namespace
+
+PipelineCache::PipelineCache(const Context& context, std::filesystem::path file)
+    : context_(&context), file_(std::move(file)) {
+  std::vector<char> data;
+  if (!file_.empty()) data = readAll(file_);
+  // The driver checks the header (vendor, device, cache UUID) and ignores data from another driver.
+  vulkanStep("creating the pipeline cache", [&] {
+    try {
+      cache_ = vk::raii::PipelineCache(context.device(), vk::PipelineCacheCreateInfo({}, data.size(), data.data()));
+      loadedBytes_ = data.size();
+    } catch (const vk::SystemError&) {
+      cache_ = vk::raii::PipelineCache(context.device(), vk::PipelineCacheCreateInfo());
+      loadedBytes_ = 0;
+    }
+  });
+}
+
+PipelineCache::~PipelineCache() { save(); }
+
+void PipelineCache::save() const {
+  if (file_.empty() || !*cache_) return;
+  try {
+    std::vector<std::uint8_t> data = cache_.getData();
+    std::error_code ec;
+    std::filesystem::create_directories(file_.parent_path(), ec);
+    auto tmp = file_;
+    tmp += ".tmp" + std::to_string(::getpid());
+    {
+      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+      if (!out) return;
+      out.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
+      if (!out) {
+        std::filesystem::remove(tmp, ec);
+        return;
+      }
+    }
+    std::filesystem::rename(tmp, file_, ec);
+    if (ec) std::filesystem::remove(tmp, ec);
+  } catch (...) {
+  }
+}
+
+std::filesystem::path PipelineCache::defaultFile(const Context& context) {
+  std::filesystem::path dir;
+  if (const char* d = std::getenv("VKRAY_CACHE_DIR"); d && *d) {
+    dir = d;
+  } else if (const char* x = std::getenv("XDG_CACHE_HOME"); x && *x) {
+    dir = std::filesystem::path(x) / "vkray";
+  } else if (const char* h = std::getenv("HOME"); h && *h) {
+    dir = std::filesystem::path(h) / ".cache" / "vkray";
+  } else {
+    return {};
+  }
+  auto props = context.physicalDevice().getProperties();
+  char name[96];
+  std::snprintf(name, sizeof name, "pipelines-%04x-%04x-%08x.bin", props.vendorID, props.deviceID, props.driverVersion);
+  return dir / name;
+}
+
+} // namespace vkray::vulkan

@@ -1,0 +1,72 @@
+// A compute pipeline built from embedded SPIR-V with specialization constants, and the on-disk
+// pipeline cache that lets a second run skip the driver's compile.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <map>
+#include <span>
+#include <string>
+
+#include <vulkan/vulkan_raii.hpp>
+
+namespace vkray::vulkan {
+
+class Context;
+
+// Specialization constants by id; every value is 32 bits (VkBool32, int or uint).
+class Specialization {
+ public:
+  void set(std::uint32_t id, std::uint32_t value) { values_[id] = value; }
+  void set(std::uint32_t id, bool value) { values_[id] = value ? 1u : 0u; }
+  void set(std::uint32_t id, int value) { values_[id] = static_cast<std::uint32_t>(value); }
+  const std::map<std::uint32_t, std::uint32_t>& values() const { return values_; }
+  bool operator<(const Specialization& o) const { return values_ < o.values_; }
+  bool operator==(const Specialization& o) const { return values_ == o.values_; }
+
+ private:
+  std::map<std::uint32_t, std::uint32_t> values_;
+};
+
+class ComputePipeline {
+ public:
+  // cache may be null.
+  ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv, vk::PipelineLayout layout,
+                  const Specialization& specialization, const vk::raii::PipelineCache* cache,
+                  const std::string& name);
+  vk::Pipeline handle() const { return *pipeline_; }
+  double creationMs() const { return creationMs_; }
+
+ private:
+  vk::raii::Pipeline pipeline_{nullptr};
+  double creationMs_ = 0.0;
+};
+
+// A VkPipelineCache loaded from and saved back to a file keyed by the device and driver.
+class PipelineCache {
+ public:
+  // An empty path keeps the cache in memory only.
+  PipelineCache(const Context& context, std::filesystem::path file);
+  ~PipelineCache();
+  PipelineCache(const PipelineCache&) = delete;
+  PipelineCache& operator=(const PipelineCache&) = delete;
+
+  const vk::raii::PipelineCache& cache() const { return cache_; }
+  bool loadedFromDisk() const { return loadedBytes_ > 0; }
+  std::size_t loadedBytes() const { return loadedBytes_; }
+  const std::filesystem::path& file() const { return file_; }
+  // Writes the cache now (atomically); also done on destruction. Failures are ignored: a cache
+  // that cannot be saved only costs the next run a compile.
+  void save() const;
+
+  // $VKRAY_CACHE_DIR, else $XDG_CACHE_HOME/vkray, else ~/.cache/vkray; file per device + driver.
+  static std::filesystem::path defaultFile(const Context& context);
+
+ private:
+  const Context* context_;
+  std::filesystem::path file_;
+  std::size_t loadedBytes_ = 0;
+  vk::raii::PipelineCache cache_{nullptr};
+};
+
+} // namespace vkray::vulkan

@@ -1,0 +1,121 @@
+// The Vulkan context: instance (with the validation layer and a messenger that counts what it
+// reports), the chosen physical device, a logical device with one compute queue, and a command pool
+// for one-shot submissions. Construction creates everything; destruction releases it in reverse.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <vulkan/vulkan_raii.hpp>
+
+namespace vkray::vulkan {
+
+struct ContextOptions {
+  bool validation = false;                // VK_LAYER_KHRONOS_validation
+  bool synchronizationValidation = false; // its synchronization checks too (implies validation)
+  bool echoValidation = true;             // print each message on stderr as it arrives
+  std::string device;                     // index or case-insensitive name substring; empty: best
+  std::vector<std::string> instanceExtensions; // e.g. GLFW's surface extensions
+  std::vector<std::string> deviceExtensions;   // e.g. VK_KHR_swapchain
+  // Extra queue-family requirement (the viewer asks for present support).
+  std::function<bool(const vk::raii::PhysicalDevice&, std::uint32_t family)> queueFamilyFilter;
+};
+
+struct DeviceInfo {
+  std::uint32_t index = 0;
+  std::string name;
+  std::string type;   // "discrete GPU", "integrated GPU", "CPU", ...
+  std::string driver; // driver name and version as the driver reports it
+  std::uint32_t apiVersion = 0;
+  bool shaderFloat64 = false;
+  bool timestamps = false;
+  std::uint64_t maxStorageBufferRange = 0;
+  std::uint64_t maxMemoryAllocationSize = 0;
+  std::uint32_t maxComputeWorkGroupCount[3] = {0, 0, 0};
+  std::uint32_t maxPushConstantsSize = 0;
+};
+
+// Messages the validation layer reported (warnings and errors).
+class ValidationLog {
+ public:
+  explicit ValidationLog(bool echo) : echo_(echo) {}
+  void add(std::string message);
+  std::size_t count() const;
+  std::vector<std::string> messages() const;
+  void clear();
+
+ private:
+  bool echo_;
+  mutable std::mutex mutex_;
+  std::vector<std::string> messages_;
+};
+
+class Context {
+ public:
+  explicit Context(const ContextOptions& options);
+  Context(const Context&) = delete;
+  Context& operator=(const Context&) = delete;
+  ~Context();
+
+  const vk::raii::Instance& instance() const { return instance_; }
+  const vk::raii::PhysicalDevice& physicalDevice() const { return physicalDevice_; }
+  const vk::raii::Device& device() const { return device_; }
+  const vk::raii::Queue& queue() const { return queue_; }
+  std::uint32_t queueFamily() const { return queueFamily_; }
+  const vk::raii::CommandPool& commandPool() const { return commandPool_; }
+  const DeviceInfo& info() const { return info_; }
+  bool float64Enabled() const { return float64Enabled_; }
+  double timestampPeriodNs() const { return timestampPeriodNs_; }
+  std::uint32_t timestampValidBits() const { return timestampValidBits_; }
+  bool validationEnabled() const { return validation_; }
+
+  // Records with `record`, submits, and waits. `step` names the work in error messages; a lost
+  // device throws DeviceLostError.
+  void submitAndWait(std::string_view step, const std::function<void(const vk::raii::CommandBuffer&)>& record) const;
+
+  std::size_t validationMessageCount() const { return log_->count(); }
+  std::vector<std::string> validationMessages() const { return log_->messages(); }
+  ValidationLog& validationLog() const { return *log_; }
+
+  // Every physical device the loader offers, without creating a logical device.
+  static std::vector<DeviceInfo> listDevices();
+
+ private:
+  // Declaration order is destruction order in reverse: the log outlives the instance (the layer
+  // reports leaked objects while the instance is destroyed), the device outlives its pool.
+  std::unique_ptr<ValidationLog> log_;
+  vk::raii::Context context_;
+  vk::raii::Instance instance_{nullptr};
+  vk::raii::DebugUtilsMessengerEXT messenger_{nullptr};
+  vk::raii::PhysicalDevice physicalDevice_{nullptr};
+  vk::raii::Device device_{nullptr};
+  vk::raii::Queue queue_{nullptr};
+  vk::raii::CommandPool commandPool_{nullptr};
+  std::uint32_t queueFamily_ = 0;
+  DeviceInfo info_;
+  bool float64Enabled_ = false;
+  bool validation_ = false;
+  double timestampPeriodNs_ = 1.0;
+  std::uint32_t timestampValidBits_ = 0;
+};
+
+// Runs f and turns a Vulkan failure into a DeviceError naming the step ("uploading the scene: ...").
+template <typename F> auto vulkanStep(std::string_view step, F&& f) -> decltype(f());
+
+// The message a lost device or failed call reports: "step: vkCall: VK_ERROR_...".
+[[noreturn]] void rethrowVulkanError(std::string_view step, const vk::SystemError& e);
+
+template <typename F> auto vulkanStep(std::string_view step, F&& f) -> decltype(f()) {
+  try {
+    return f();
+  } catch (const vk::SystemError& e) {
+    rethrowVulkanError(step, e);
+  }
+}
+
+} // namespace vkray::vulkan

@@ -1,0 +1,251 @@
+// One intersection function per primitive, in two steps as in pbrt-v4: a cheap test that returns t
+// (and barycentrics where they exist), then a function that builds the surface record. Each test has
+// a robust form (the default) and the textbook "naive" form kept for the accuracy report.
+// Nothing here reads scene buffers: trace.comp and probe.comp both call these on plain values.
+#ifndef VKRAY_INTERSECT_GLSL
+#define VKRAY_INTERSECT_GLSL
+
+#include "common.glsl"
+#include "offset.glsl"
+
+// ---- Spheres -------------------------------------------------------------------------------------
+
+// Ray Tracing Gems ch. 7 (Haines, Gunther & Akenine-Moller, "Precision Improvements for Ray/Sphere
+// Intersection"): the discriminant from the distance of the centre to the ray line,
+// r^2 - |f - (f.d/a) d|^2, which keeps its precision for small spheres far away; and the root pair
+// c/q, q/a from q = b' + sgn(b') sqrt(a disc), which avoids cancellation in the smaller root.
+// Returns the nearest root in (0, tMax), or -1.
+float intersectSphereRobust(Ray ray, vec3 center, float radius, float tMax) {
+  vec3 f = ray.origin - center;
+  float a = dot(ray.dir, ray.dir);
+  float bPrime = -dot(f, ray.dir);  // b' = -f.d (half of -b)
+  vec3 l = f + (bPrime / a) * ray.dir; // f minus its projection on d: centre-to-line vector
+  float r2 = radius * radius;
+  float discA = r2 - dot(l, l);        // = disc / a
+  if (discA < 0.0) return -1.0;
+  float c = dot(f, f) - r2;
+  float q = bPrime + signNonZero(bPrime) * sqrt(a * discA);
+  if (q == 0.0) return -1.0;           // degenerate direction (a == 0) or ray through the centre of a point
+  float t0 = c / q;
+  float t1 = q / a;
+  float tNear = min(t0, t1);
+  float tFar = max(t0, t1);
+  if (tNear > 0.0 && tNear < tMax) return tNear;
+  if (tFar > 0.0 && tFar < tMax) return tFar;
+  return -1.0;
+}
+
+// The textbook quadratic formula with a fixed epsilon on t (as in most first ray tracers).
+float intersectSphereNaive(Ray ray, vec3 center, float radius, float tMax) {
+  vec3 f = ray.origin - center;
+  float a = dot(ray.dir, ray.dir);
+  float b = 2.0 * dot(f, ray.dir);
+  float c = dot(f, f) - radius * radius;
+  float disc = b * b - 4.0 * a * c;
+  if (disc < 0.0) return -1.0;
+  float s = sqrt(disc);
+  float t0 = (-b - s) / (2.0 * a);
+  float t1 = (-b + s) / (2.0 * a);
+  if (t0 > kNaiveEpsilon && t0 < tMax) return t0;
+  if (t1 > kNaiveEpsilon && t1 < tMax) return t1;
+  return -1.0;
+}
+
+// Hit point re-projected onto the sphere (RTG ch. 7), outward unit normal, and an error bound: the
+// re-projected point is a few roundings of values of size |centre| + r (pbrt-v4 sphere bound).
+void sphereSurface(Ray ray, float t, vec3 center, float radius, out vec3 p, out vec3 n,
+                   out float errorBound) {
+  vec3 hit = ray.origin + t * ray.dir;
+  vec3 rel = hit - center;
+  float len = length(rel);
+  n = len > 0.0 ? rel / len : vec3(0.0, 0.0, 1.0);
+  p = center + radius * n;
+  errorBound = gammaBound(6) * (radius + maxComponent(abs(center)));
+}
+
+// ---- Planes: n.x + D = 0 -------------------------------------------------------------------------
+
+// Rays parallel to the plane (n.d == 0) miss; so does an origin exactly on the plane (t == 0).
+float intersectPlaneRobust(Ray ray, vec3 n, float offsetD, float tMax) {
+  float denom = dot(n, ray.dir);
+  if (denom == 0.0) return -1.0;
+  float t = -(dot(n, ray.origin) + offsetD) / denom;
+  return (t > 0.0 && t < tMax) ? t : -1.0;
+}
+
+float intersectPlaneNaive(Ray ray, vec3 n, float offsetD, float tMax) {
+  float denom = dot(n, ray.dir);
+  if (abs(denom) < 1e-6) return -1.0;
+  float t = -(dot(n, ray.origin) + offsetD) / denom;
+  return (t > kNaiveEpsilon && t < tMax) ? t : -1.0;
+}
+
+// The distance of p = o + t d from the plane is the rounding of n.o + D (values of size |o|, |D|)
+// and of t d: bound it by a few ulps of their sum.
+void planeSurface(Ray ray, float t, vec3 n, float offsetD, out vec3 p, out float errorBound) {
+  p = ray.origin + t * ray.dir;
+  float scale = maxComponent(abs(ray.origin)) + abs(offsetD) + t * maxComponent(abs(ray.dir)) +
+                maxComponent(abs(p));
+  errorBound = gammaBound(6) * scale;
+}
+
+// ---- Triangles -----------------------------------------------------------------------------------
+
+// Per-ray set-up of the watertight test (Woop, Benthin & Wald, "Watertight Ray/Triangle
+// Intersection", JCGT 2(1), 2013): permute axes so z is the largest direction component, then
+// shear so the ray becomes the +z axis.
+struct WatertightRay {
+  ivec3 k;   // kx, ky, kz
+  vec3 shear; // Sx, Sy, Sz
+};
+
+WatertightRay watertightSetup(vec3 dir) {
+  vec3 a = abs(dir);
+  int kz = (a.x > a.y) ? ((a.x > a.z) ? 0 : 2) : ((a.y > a.z) ? 1 : 2);
+  int kx = (kz + 1) % 3;
+  int ky = (kx + 1) % 3;
+  if (dir[kz] < 0.0) { int tmp = kx; kx = ky; ky = tmp; } // keep the winding
+  WatertightRay w;
+  w.k = ivec3(kx, ky, kz);
+  w.shear = vec3(dir[kx] / dir[kz], dir[ky] / dir[kz], 1.0 / dir[kz]);
+  return w;
+}
+
+// Edge function of the 2-D edge p -> q in the sheared ray space. `precise` forbids fusing the two
+// products into an FMA: then edge(q, p) == -edge(p, q) bit for bit, so a shared edge is classified
+// identically from both sides and no ray slips through (Woop et al. section 3). Polygons use the same
+// function, so a polygon and a triangle sharing an edge leave no crack either.
+float edgeFunction(vec2 p, vec2 q) {
+  precise float a = q.x * p.y;
+  precise float b = q.y * p.x;
+  precise float e = a - b;
+  return e;
+}
+
+// Vertex relative to the ray origin, permuted and sheared (x, y in the ray's 2-D frame, z scaled).
+vec3 shearVertex(vec3 v, Ray ray, WatertightRay w) {
+  vec3 r = v - ray.origin;
+  float rz = r[w.k.z];
+  return vec3(r[w.k.x] - w.shear.x * rz, r[w.k.y] - w.shear.y * rz, w.shear.z * rz);
+}
+
+// Returns t in (0, tMax) or -1; bary = (b0, b1, b2) weights of v0, v1, v2. Degenerate triangles
+// (det == 0) never hit and never divide.
+float intersectTriangleRobust(Ray ray, WatertightRay w, vec3 v0, vec3 v1, vec3 v2, float tMax,
+                              out vec3 bary) {
+  bary = vec3(0.0);
+  vec3 A = shearVertex(v0, ray, w);
+  vec3 B = shearVertex(v1, ray, w);
+  vec3 C = shearVertex(v2, ray, w);
+  float U = edgeFunction(B.xy, C.xy);
+  float V = edgeFunction(C.xy, A.xy);
+  float W = edgeFunction(A.xy, B.xy);
+  if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return -1.0;
+  float det = U + V + W;
+  if (det == 0.0) return -1.0;
+  float T = U * A.z + V * B.z + W * C.z;
+  // t = T / det must lie in (0, tMax): compare without dividing, sign-corrected (paper, fig. 2).
+  float detSign = det < 0.0 ? -1.0 : 1.0;
+  float Ts = T * detSign;
+  float detAbs = abs(det);
+  if (Ts <= 0.0 || Ts >= tMax * detAbs) return -1.0;
+  float inv = 1.0 / det;
+  bary = vec3(U, V, W) * inv;
+  return T * inv;
+}
+
+// The seed's area test: t from the plane, then the hit point is inside when the three sub-triangle
+// areas (unnormalised cross products) agree in sign with the face normal; fixed epsilon on t.
+float intersectTriangleNaive(Ray ray, vec3 v0, vec3 v1, vec3 v2, float tMax, out vec3 bary) {
+  bary = vec3(0.0);
+  vec3 n = cross(v1 - v0, v2 - v0);
+  float denom = dot(n, ray.dir);
+  if (abs(denom) < 1e-12) return -1.0;
+  float t = dot(n, v0 - ray.origin) / denom;
+  if (!(t > kNaiveEpsilon && t < tMax)) return -1.0;
+  vec3 p = ray.origin + t * ray.dir;
+  float a0 = dot(n, cross(v2 - v1, p - v1));
+  float a1 = dot(n, cross(v0 - v2, p - v2));
+  float a2 = dot(n, cross(v1 - v0, p - v0));
+  if (a0 < 0.0 || a1 < 0.0 || a2 < 0.0) return -1.0;
+  float nn = dot(n, n);
+  bary = vec3(a0, a1, a2) / nn;
+  return t;
+}
+
+// Hit point from the barycentrics (more accurate than o + t d; RTG ch. 6), and its error bound:
+// pbrt-v4 bounds the rounding of b0 v0 + b1 v1 + b2 v2 by gamma(7) sum |b_i v_i|.
+void triangleSurface(vec3 bary, vec3 v0, vec3 v1, vec3 v2, out vec3 p, out vec3 ng,
+                     out float errorBound) {
+  p = bary.x * v0 + bary.y * v1 + bary.z * v2;
+  vec3 sumAbs = abs(bary.x * v0) + abs(bary.y * v1) + abs(bary.z * v2);
+  errorBound = gammaBound(7) * maxComponent(sumAbs);
+  vec3 c = cross(v1 - v0, v2 - v0);
+  float len = length(c);
+  ng = len > 0.0 ? c / len : vec3(0.0, 0.0, 1.0);
+}
+
+// ---- Convex polygons -----------------------------------------------------------------------------
+// The inside test runs in the triangle's sheared frame with the same edge function, so a polygon and
+// a triangle sharing an edge classify rays on it identically: no crack. t comes from the plane through
+// the first vertex, in coordinates relative to the ray origin (accurate far from the world origin).
+// Vertices live in a buffer only the includer knows: it defines VKRAY_POLYGON_VERTEX(i) first.
+
+// t in (tMin, tMax) of the plane through v0 with normal n, or -1. Robust callers pass tMin = 0 and
+// minDenom = 0 (only an exactly parallel ray misses); naive ones the textbook epsilons.
+float polygonPlaneT(Ray ray, vec3 n, vec3 v0, float tMax, float tMin, float minDenom) {
+  float denom = dot(n, ray.dir);
+  if (abs(denom) <= minDenom) return -1.0;
+  float t = dot(n, v0 - ray.origin) / denom;
+  return (t > tMin && t < tMax) ? t : -1.0;
+}
+
+#ifdef VKRAY_POLYGON_VERTEX
+float intersectPolygonRobust(Ray ray, WatertightRay w, vec3 n, uint first, uint count, float tMax) {
+  vec3 v0 = VKRAY_POLYGON_VERTEX(first);
+  float t = polygonPlaneT(ray, n, v0, tMax, 0.0, 0.0);
+  if (t < 0.0) return -1.0;
+  vec2 start = shearVertex(v0, ray, w).xy;
+  vec2 prev = start;
+  bool anyNeg = false;
+  bool anyPos = false;
+  for (uint i = 1u; i < count; ++i) {
+    vec2 cur = shearVertex(VKRAY_POLYGON_VERTEX(first + i), ray, w).xy;
+    float e = edgeFunction(prev, cur);
+    anyNeg = anyNeg || e < 0.0;
+    anyPos = anyPos || e > 0.0;
+    prev = cur;
+  }
+  float e = edgeFunction(prev, start);
+  anyNeg = anyNeg || e < 0.0;
+  anyPos = anyPos || e > 0.0;
+  // Mixed signs: outside. All zero: the ray lies in the polygon's plane (degenerate), a miss.
+  return (anyNeg == anyPos) ? -1.0 : t;
+}
+
+// The seed's test: t from the plane with a fixed epsilon, then the hit point must lie on the inner
+// side of every edge (3-D cross products against the face normal).
+float intersectPolygonNaive(Ray ray, vec3 n, uint first, uint count, float tMax) {
+  vec3 v0 = VKRAY_POLYGON_VERTEX(first);
+  float t = polygonPlaneT(ray, n, v0, tMax, kNaiveEpsilon, 1e-6);
+  if (t < 0.0) return -1.0;
+  vec3 p = ray.origin + t * ray.dir;
+  vec3 prev = v0;
+  for (uint i = 1u; i <= count; ++i) {
+    vec3 cur = VKRAY_POLYGON_VERTEX(first + (i % count));
+    if (dot(n, cross(cur - prev, p - prev)) < 0.0) return -1.0;
+    prev = cur;
+  }
+  return t;
+}
+#endif
+
+// Error bound as for planes: p = o + t d against the plane through v0.
+void polygonSurface(Ray ray, float t, vec3 v0, out vec3 p, out float errorBound) {
+  p = ray.origin + t * ray.dir;
+  float scale = maxComponent(abs(ray.origin)) + maxComponent(abs(v0)) +
+                t * maxComponent(abs(ray.dir)) + maxComponent(abs(p));
+  errorBound = gammaBound(6) * scale;
+}
+
+#endif

@@ -1,0 +1,56 @@
+// Sub-pixel sample positions: the pixel centre for single-sample renders, otherwise an Owen-scrambled
+// Sobol (0,2)-sequence per pixel. Any power-of-two prefix of it is stratified in every elementary
+// interval (4 samples: one per quadrant; 16: one per 4x4 cell and per 1x16 strip), and a progressive
+// viewer that draws sample k in frame k sees exactly the samples a headless --spp N render uses.
+#ifndef VKRAY_SAMPLING_GLSL
+#define VKRAY_SAMPLING_GLSL
+
+#include "common.glsl"
+
+// First two Sobol dimensions as 0.32 fixed point: dimension 0 is the van der Corput sequence,
+// dimension 1 has direction numbers v_i = v_(i-1) ^ (v_(i-1) >> 1).
+uvec2 sobol2(uint index) {
+  uint d0 = 0u;
+  uint d1 = 0u;
+  uint v1 = 0x80000000u;
+  uint v0 = 0x80000000u;
+  for (uint i = index; i != 0u; i >>= 1u) {
+    if ((i & 1u) != 0u) {
+      d0 ^= v0;
+      d1 ^= v1;
+    }
+    v0 >>= 1u;
+    v1 ^= v1 >> 1u;
+  }
+  return uvec2(d0, d1);
+}
+
+// Nested uniform (Owen) scrambling of a 32-bit fixed-point value, applied to its bit-reversed form so
+// that the hash mixes only higher bits into lower ones (Burley, "Practical Hash-based Owen
+// Scrambling", JCGT 9(4), 2020, after Laine & Karras 2011).
+uint laineKarrasPermutation(uint x, uint seed) {
+  x += seed;
+  x ^= x * 0x6c50b47cu;
+  x ^= x * 0xb82f1e52u;
+  x ^= x * 0xc7afe638u;
+  x ^= x * 0x8d22f6e6u;
+  return x;
+}
+
+uint nestedUniformScramble(uint x, uint seed) {
+  x = bitfieldReverse(x);
+  x = laineKarrasPermutation(x, seed);
+  return bitfieldReverse(x);
+}
+
+// Sample `index` of pixel `pixelSeed`, in [0, 1)^2. The index itself is Owen-scrambled first, which
+// shuffles the order of the sequence per pixel without breaking its power-of-two stratification.
+vec2 sobolOwenSample(uint index, uint pixelSeed) {
+  uint shuffled = nestedUniformScramble(index, hashPcg(pixelSeed));
+  uvec2 s = sobol2(shuffled);
+  uint x = nestedUniformScramble(s.x, hashPcg(pixelSeed ^ 0x5bd1e995u));
+  uint y = nestedUniformScramble(s.y, hashPcg(pixelSeed ^ 0x1b873593u));
+  return vec2(float(x >> 8u), float(y >> 8u)) * (1.0 / 16777216.0);
+}
+
+#endif

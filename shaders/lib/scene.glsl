@@ -1,0 +1,251 @@
+// The scene as the tracing kernel sees it: descriptor bindings, specialization constants, and the two
+// queries every ray makes (closest hit; occlusion up to a distance), over brute-force loops or a BVH.
+#ifndef VKRAY_SCENE_GLSL
+#define VKRAY_SCENE_GLSL
+
+#include "../shared/gpu_types.h"
+#include "common.glsl"
+
+// ---- Specialization: what this scene calls for ---------------------------------------------------
+layout(constant_id = kSpecHasSpheres) const bool HAS_SPHERES = true;
+layout(constant_id = kSpecHasPlanes) const bool HAS_PLANES = true;
+layout(constant_id = kSpecHasTriangles) const bool HAS_TRIANGLES = true;
+layout(constant_id = kSpecHasPolygons) const bool HAS_POLYGONS = true;
+layout(constant_id = kSpecUseBvh) const bool USE_BVH = false;
+layout(constant_id = kSpecShadows) const bool SHADOWS = true;
+layout(constant_id = kSpecReflection) const bool REFLECTION = true;
+layout(constant_id = kSpecRefraction) const bool REFRACTION = true;
+layout(constant_id = kSpecStackSize) const int STACK_SIZE = 16;
+layout(constant_id = kSpecCountStats) const bool COUNT_STATS = true;
+layout(constant_id = kSpecNumerics) const uint NUMERICS = kNumericsRobust;
+layout(constant_id = kSpecFresnel) const uint FRESNEL = kFresnelExact;
+layout(constant_id = kSpecShadowMode) const uint SHADOW_MODE = kShadowsAttenuated;
+layout(constant_id = kSpecChecker) const bool CHECKER = true;
+layout(constant_id = kSpecSmoothNormals) const bool SMOOTH_NORMALS = true;
+
+const bool ROBUST = NUMERICS == kNumericsRobust;
+
+// ---- Buffers -------------------------------------------------------------------------------------
+layout(std140, binding = kBindingFrame) uniform FrameBlock { FrameParams frame; };
+layout(std430, binding = kBindingMaterials) readonly buffer Materials { Material materials[]; };
+layout(std430, binding = kBindingLights) readonly buffer Lights { Light lights[]; };
+layout(std430, binding = kBindingSpheres) readonly buffer Spheres { Sphere spheres[]; };
+layout(std430, binding = kBindingPlanes) readonly buffer Planes { Plane planes[]; };
+layout(std430, binding = kBindingTriangles) readonly buffer Triangles { Triangle triangles[]; };
+layout(std430, binding = kBindingPolygons) readonly buffer Polygons { Polygon polygons[]; };
+layout(std430, binding = kBindingPolyVertices) readonly buffer PolyVertices { vec4 polyVertices[]; };
+layout(std430, binding = kBindingNormals) readonly buffer Normals { vec4 shadingNormals[]; };
+layout(std430, binding = kBindingBvhNodes) readonly buffer BvhNodes { BvhNode bvhNodes[]; };
+layout(std430, binding = kBindingPrimRefs) readonly buffer PrimRefs { uint primRefs[]; };
+
+#define VKRAY_POLYGON_VERTEX(i) polyVertices[i].xyz
+#include "intersect.glsl"
+
+// ---- Hits ----------------------------------------------------------------------------------------
+const uint kNoHit = 0xFFFFFFFFu;
+
+struct Hit {
+  float t;    // the query's tMax when nothing was hit
+  uint kind;  // kPrimSphere / kPrimTriangle / kPrimPolygon / kPrimPlane, or kNoHit
+  uint index; // into the array of that kind
+  vec3 bary;  // triangles: barycentric weights of v0, v1, v2
+};
+
+// Everything shading needs about a hit, built once for the closest hit (pbrt's second step).
+struct Surface {
+  vec3 p;           // hit point
+  vec3 ng;          // geometric normal, unit, as stored (outward for spheres)
+  vec3 ns;          // shading normal, unit, on the same side as ng
+  float errorBound; // distance of p from the true surface along ng, at most
+  uint material;
+  uint kind;        // kPrim* of the primitive hit
+};
+
+// A ray with its per-ray precomputation for the watertight triangle test and the BVH slabs.
+struct TraceRay {
+  Ray ray;
+  WatertightRay w;
+  vec3 invDir;
+};
+
+TraceRay makeTraceRay(vec3 origin, vec3 dir) {
+  TraceRay r;
+  r.ray = Ray(origin, dir);
+  if (HAS_TRIANGLES || HAS_POLYGONS) r.w = watertightSetup(dir);
+  // An exactly-zero component would give (0 * inf) = NaN in the slab test; a tiny one gives the same
+  // classification for every box the ray does not lie in the face plane of.
+  vec3 safe = mix(dir, vec3(1e-30), equal(dir, vec3(0.0)));
+  r.invDir = 1.0 / safe;
+  return r;
+}
+
+float sphereT(TraceRay r, uint i, float tMax) {
+  vec4 s = spheres[i].centerRadius;
+  return ROBUST ? intersectSphereRobust(r.ray, s.xyz, s.w, tMax)
+                : intersectSphereNaive(r.ray, s.xyz, s.w, tMax);
+}
+
+float triangleT(TraceRay r, uint i, float tMax, out vec3 bary) {
+  Triangle tri = triangles[i];
+  return ROBUST ? intersectTriangleRobust(r.ray, r.w, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary)
+                : intersectTriangleNaive(r.ray, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary);
+}
+
+float polygonT(TraceRay r, uint i, float tMax) {
+  Polygon poly = polygons[i];
+  return ROBUST ? intersectPolygonRobust(r.ray, r.w, poly.plane.xyz, poly.meta.x, poly.meta.y, tMax)
+                : intersectPolygonNaive(r.ray, poly.plane.xyz, poly.meta.x, poly.meta.y, tMax);
+}
+
+float planeT(TraceRay r, uint i, float tMax) {
+  vec4 pl = planes[i].normalOffset;
+  return ROBUST ? intersectPlaneRobust(r.ray, pl.xyz, pl.w, tMax)
+                : intersectPlaneNaive(r.ray, pl.xyz, pl.w, tMax);
+}
+
+// Tests one BVH leaf reference (or brute-force primitive) and keeps the closest hit.
+void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
+  if (HAS_SPHERES && kind == kPrimSphere) {
+    float t = sphereT(r, index, hit.t);
+    if (t > 0.0) hit = Hit(t, kPrimSphere, index, vec3(0.0));
+  } else if (HAS_TRIANGLES && kind == kPrimTriangle) {
+    vec3 bary;
+    float t = triangleT(r, index, hit.t, bary);
+    if (t > 0.0) hit = Hit(t, kPrimTriangle, index, bary);
+  } else if (HAS_POLYGONS && kind == kPrimPolygon) {
+    float t = polygonT(r, index, hit.t);
+    if (t > 0.0) hit = Hit(t, kPrimPolygon, index, vec3(0.0));
+  }
+}
+
+// Slab test against a node's box. The far distance is widened by 1 + 2 gamma(3) so rounding in
+// the slab arithmetic never culls a box the ray truly touches (Ize, "Robust BVH Ray Traversal",
+// JCGT 2(2), 2013): without it a ray along a shared mesh edge can miss both triangles' boxes.
+bool hitsBox(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
+  vec3 t0 = (bmin - r.ray.origin) * r.invDir;
+  vec3 t1 = (bmax - r.ray.origin) * r.invDir;
+  vec3 tNear = min(t0, t1);
+  vec3 tFar = max(t0, t1);
+  float enter = max(max(tNear.x, tNear.y), max(tNear.z, 0.0));
+  float leave = min(min(tFar.x, tFar.y), min(tFar.z, tMax)) * 1.0000003576;
+  return enter <= leave;
+}
+
+const int kBvhStackSize = 32; // the builder caps tree depth at this (host/accel/bvh.h)
+
+// Closest hit over the BVH's bounded primitives; with anyHit, returns at the first hit found.
+void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
+  uint stack[kBvhStackSize];
+  int sp = 0;
+  uint node = 0u;
+  bvec3 dirNeg = lessThan(r.ray.dir, vec3(0.0));
+  while (true) {
+    BvhNode n = bvhNodes[node];
+    if (hitsBox(r, n.boundsMin, n.boundsMax, hit.t)) {
+      uint count = n.countAxis & 0xFFFFu;
+      if (count > 0u) {
+        for (uint i = 0u; i < count; ++i) {
+          uint ref = primRefs[n.offset + i];
+          testPrimitive(r, ref >> kPrimKindShift, ref & kPrimIndexMask, hit);
+          if (anyHit && hit.kind != kNoHit) return;
+        }
+        if (sp == 0) break;
+        node = stack[--sp];
+      } else {
+        // Visit the child on the near side of the split first; the far one waits on the stack.
+        uint axis = (n.countAxis >> 16u) & 3u;
+        uint nearChild = dirNeg[axis] ? n.offset : node + 1u;
+        uint farChild = dirNeg[axis] ? node + 1u : n.offset;
+        // The builder caps the depth at kBvhStackSize, so the guard never drops a subtree.
+        if (sp < kBvhStackSize) stack[sp++] = farChild;
+        node = nearChild;
+      }
+    } else {
+      if (sp == 0) break;
+      node = stack[--sp];
+    }
+  }
+}
+
+// Closest hit in (0, tMax). anyHit: stop at the first hit (shadow rays).
+Hit traceScene(TraceRay r, float tMax, bool anyHit) {
+  Hit hit = Hit(tMax, kNoHit, 0u, vec3(0.0));
+  if (HAS_PLANES) {
+    for (uint i = 0u; i < frame.counts.y; ++i) {
+      float t = planeT(r, i, hit.t);
+      if (t > 0.0) {
+        hit = Hit(t, kPrimPlane, i, vec3(0.0));
+        if (anyHit) return hit;
+      }
+    }
+  }
+  if (USE_BVH) {
+    if (frame.counts2.y > 0u) traverseBvh(r, hit, anyHit);
+  } else {
+    if (HAS_SPHERES) {
+      for (uint i = 0u; i < frame.counts.x; ++i) {
+        testPrimitive(r, kPrimSphere, i, hit);
+        if (anyHit && hit.kind != kNoHit) return hit;
+      }
+    }
+    if (HAS_TRIANGLES) {
+      for (uint i = 0u; i < frame.counts.z; ++i) {
+        testPrimitive(r, kPrimTriangle, i, hit);
+        if (anyHit && hit.kind != kNoHit) return hit;
+      }
+    }
+    if (HAS_POLYGONS) {
+      for (uint i = 0u; i < frame.counts.w; ++i) {
+        testPrimitive(r, kPrimPolygon, i, hit);
+        if (anyHit && hit.kind != kNoHit) return hit;
+      }
+    }
+  }
+  return hit;
+}
+
+// Builds the surface record of the closest hit (called once per ray, not per candidate).
+Surface surfaceAt(TraceRay r, Hit hit) {
+  Surface s;
+  s.kind = hit.kind;
+  if (hit.kind == kPrimSphere) {
+    vec4 cr = spheres[hit.index].centerRadius;
+    sphereSurface(r.ray, hit.t, cr.xyz, cr.w, s.p, s.ng, s.errorBound);
+    s.ns = s.ng;
+    s.material = spheres[hit.index].meta.x;
+  } else if (hit.kind == kPrimTriangle) {
+    Triangle tri = triangles[hit.index];
+    if (ROBUST) {
+      triangleSurface(hit.bary, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, s.p, s.ng, s.errorBound);
+    } else {
+      vec3 unused;
+      triangleSurface(hit.bary, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, unused, s.ng, s.errorBound);
+      s.p = r.ray.origin + hit.t * r.ray.dir;
+    }
+    s.ns = s.ng;
+    uint normalBase = floatBitsToUint(tri.v1.w);
+    if (SMOOTH_NORMALS && normalBase != kNoNormals) {
+      vec3 n = hit.bary.x * shadingNormals[normalBase].xyz +
+               hit.bary.y * shadingNormals[normalBase + 1u].xyz +
+               hit.bary.z * shadingNormals[normalBase + 2u].xyz;
+      float len = length(n);
+      if (len > 0.0) s.ns = n / len; // zero-length interpolated normal: keep the geometric one
+    }
+    s.material = floatBitsToUint(tri.v0.w);
+  } else if (hit.kind == kPrimPolygon) {
+    Polygon poly = polygons[hit.index];
+    polygonSurface(r.ray, hit.t, polyVertices[poly.meta.x].xyz, s.p, s.errorBound);
+    s.ng = poly.plane.xyz;
+    s.ns = s.ng;
+    s.material = poly.meta.z;
+  } else {
+    vec4 pl = planes[hit.index].normalOffset;
+    planeSurface(r.ray, hit.t, pl.xyz, pl.w, s.p, s.errorBound);
+    s.ng = pl.xyz;
+    s.ns = s.ng;
+    s.material = planes[hit.index].meta.x;
+  }
+  return s;
+}
+
+#endif

@@ -1,0 +1,159 @@
+// Local shading (the Phong model of the seed and POV-Ray's finish), shadow rays, Fresnel and the
+// per-ray stack of transmissive media. Needs scene.glsl and the kernel's ray counters.
+#ifndef VKRAY_SHADE_GLSL
+#define VKRAY_SHADE_GLSL
+
+#include "optics.glsl"
+#include "scene.glsl"
+
+// Ray counters of this invocation, summed per workgroup at the end of the kernel (trace.comp).
+uint gShadowRays = 0u;
+
+const int kMaxShadowCrossings = 8; // transmissive surfaces a shadow ray passes before giving up
+
+// ---- Media stack: up to kMaxMediaDepth material ids, 16 bits each, packed into a uvec2 ----------
+const uvec2 kEmptyMedia = uvec2(0xFFFFFFFFu);
+
+uint mediaSlot(uvec2 m, uint i) { return (m[i >> 1u] >> ((i & 1u) * 16u)) & 0xFFFFu; }
+
+uvec2 mediaSetSlot(uvec2 m, uint i, uint id) {
+  uint shift = (i & 1u) * 16u;
+  m[i >> 1u] = (m[i >> 1u] & ~(0xFFFFu << shift)) | (id << shift);
+  return m;
+}
+
+// The innermost medium, or kNoMedium outside everything.
+uint mediaTop(uvec2 m) {
+  for (int i = int(kMaxMediaDepth) - 1; i >= 0; --i) {
+    uint id = mediaSlot(m, uint(i));
+    if (id != kNoMedium) return id;
+  }
+  return kNoMedium;
+}
+
+// Entering a medium; a full stack keeps its outer media (documented limit of kMaxMediaDepth).
+uvec2 mediaPush(uvec2 m, uint id) {
+  for (uint i = 0u; i < kMaxMediaDepth; ++i) {
+    if (mediaSlot(m, i) == kNoMedium) return mediaSetSlot(m, i, id);
+  }
+  return m;
+}
+
+// Leaving a medium: remove its innermost entry and close the gap.
+uvec2 mediaRemove(uvec2 m, uint id) {
+  int found = -1;
+  for (int i = int(kMaxMediaDepth) - 1; i >= 0 && found < 0; --i) {
+    if (mediaSlot(m, uint(i)) == id) found = i;
+  }
+  if (found < 0) return m;
+  for (uint i = uint(found); i + 1u < kMaxMediaDepth; ++i) m = mediaSetSlot(m, i, mediaSlot(m, i + 1u));
+  return mediaSetSlot(m, kMaxMediaDepth - 1u, kNoMedium);
+}
+
+float mediumIor(uint id) { return id == kNoMedium ? 1.0 : materials[id].transmission.y; }
+
+// Beer-Lambert attenuation over a distance; a zero coefficient never meets an infinite distance.
+vec3 beerLambert(vec3 sigma, float dist) {
+  return vec3(sigma.x > 0.0 ? exp(-sigma.x * dist) : 1.0, sigma.y > 0.0 ? exp(-sigma.y * dist) : 1.0,
+              sigma.z > 0.0 ? exp(-sigma.z * dist) : 1.0);
+}
+
+// ---- Surface colour ------------------------------------------------------------------------------
+// Checker: planar surfaces use squares in the plane's own frame (a 3-D checker flickers on a floor at
+// y = 0, where rounding puts hit points on either side of the cell boundary); spheres the 3-D one.
+vec3 baseColor(Material mat, Surface s) {
+  if (!CHECKER || mat.color2.a <= 0.0) return mat.color.rgb;
+  vec3 pw = (s.p + frame.worldOffset.xyz) / mat.color2.a;
+  float cells;
+  if (s.kind == kPrimSphere) {
+    cells = floor(pw.x) + floor(pw.y) + floor(pw.z);
+  } else {
+    vec3 n = s.ng;
+    vec3 a = abs(n);
+    vec3 axis = (a.x <= a.y && a.x <= a.z) ? vec3(1, 0, 0) : (a.y <= a.z ? vec3(0, 1, 0) : vec3(0, 0, 1));
+    vec3 u = normalize(cross(axis, n));
+    vec3 v = cross(n, u);
+    cells = floor(dot(pw, u)) + floor(dot(pw, v));
+  }
+  return (mod(cells, 2.0) == 0.0) ? mat.color.rgb : mat.color2.rgb;
+}
+
+// Fraction of a light's colour that reaches `origin` (already offset off the surface): 0 or 1 for
+// opaque shadows; through transmissive surfaces, the product of their transmissions and the
+// Beer-Lambert absorption between entering and leaving (POV-Ray's default behaviour).
+vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
+  vec3 toLight = lightPos - origin;
+  float dist = length(toLight);
+  if (dist <= 0.0) return vec3(1.0);
+  vec3 dir = toLight / dist;
+  if (!REFRACTION || SHADOW_MODE == kShadowsOpaque) {
+    if (COUNT_STATS) gShadowRays++;
+    Hit h = traceScene(makeTraceRay(origin, dir), dist, true);
+    return h.kind == kNoHit ? vec3(1.0) : vec3(0.0);
+  }
+  vec3 transmit = vec3(1.0);
+  vec3 o = origin;
+  float travelled = 0.0; // along the shadow ray from the first origin
+  float enteredAt = 0.0;
+  for (int crossing = 0; crossing < kMaxShadowCrossings; ++crossing) {
+    if (COUNT_STATS) gShadowRays++;
+    TraceRay r = makeTraceRay(o, dir);
+    float remaining = length(lightPos - o);
+    Hit h = traceScene(r, remaining, false);
+    if (h.kind == kNoHit) return transmit;
+    Surface s = surfaceAt(r, h);
+    Material m = materials[s.material];
+    if (m.transmission.x <= 0.0) return vec3(0.0);
+    transmit *= m.transmission.x;
+    float here = travelled + h.t;
+    bool entering = dot(s.ng, dir) < 0.0;
+    if (entering) {
+      enteredAt = here;
+    } else {
+      transmit *= beerLambert(m.absorption.rgb, here - enteredAt);
+    }
+    if (maxComponent(transmit) <= 0.0) return vec3(0.0);
+    vec3 side = entering ? -s.ng : s.ng; // continue on the far side of the surface
+    vec3 next = ROBUST ? spawnOrigin(s.p, side, s.errorBound) : s.p;
+    travelled += length(next - o);
+    o = next;
+  }
+  return transmit;
+}
+
+// Ambient + for each light: visibility * colour * (diffuse * base * n.l + specular * (r.v)^shininess).
+// ngf/nsf: geometric and shading normals turned towards the incoming ray.
+vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
+  vec3 base = baseColor(mat, s);
+  vec3 color = mat.color.a * base * frame.ambientLight.rgb;
+  float kd = mat.phong.x;
+  float ks = mat.phong.y;
+  float shininess = mat.phong.z;
+  if (kd <= 0.0 && ks <= 0.0) return color; // nothing to light: no shadow rays either
+  vec3 v = -rayDir;
+  vec3 origin = ROBUST ? spawnOrigin(s.p, ngf, s.errorBound) : s.p;
+  for (uint i = 0u; i < frame.counts2.x; ++i) {
+    Light light = lights[i];
+    vec3 toLight = light.position.xyz - s.p;
+    float dist = length(toLight);
+    if (dist <= 0.0) continue;
+    vec3 l = toLight / dist;
+    // A light behind the surface (geometrically, or for the shading normal) does not light it.
+    if (dot(ngf, l) <= 0.0) continue;
+    float ndotl = dot(nsf, l);
+    if (ndotl <= 0.0) continue;
+    vec3 visible = vec3(1.0);
+    if (SHADOWS && light.position.w > 0.0) {
+      visible = shadowTransmittance(origin, light.position.xyz);
+      if (maxComponent(visible) <= 0.0) continue;
+    }
+    vec3 r = reflect(-l, nsf);
+    float rv = dot(r, v);
+    // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
+    float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
+    color += visible * light.color.rgb * (kd * ndotl * base + spec);
+  }
+  return color;
+}
+
+#endif

@@ -1,0 +1,216 @@
+// The one description of everything the host and the shaders exchange: buffer structs (std430),
+// binding numbers, specialization-constant ids, push constants and the workgroup size. Compiled as
+// C++ (glm types, static_asserts in host/render/gpu_layout.cpp) and as GLSL (#include).
+//
+// Layout rule: every struct is made of vec4/uvec4 (or a vec3 followed by a 4-byte scalar), so std430
+// and the C++ layout agree without hidden padding.
+#ifndef VKRAY_GPU_TYPES_H
+#define VKRAY_GPU_TYPES_H
+
+#ifdef __cplusplus
+#include <cstdint>
+#include <glm/glm.hpp>
+namespace vkray::gpu {
+using vec3 = glm::vec3;
+using vec4 = glm::vec4;
+using uvec2 = glm::uvec2;
+using uvec4 = glm::uvec4;
+using uint = std::uint32_t;
+#define VKRAY_CONST(type, name, value) inline constexpr type name = value
+#else
+#define VKRAY_CONST(type, name, value) const type name = value
+#endif
+
+// ---- Dispatch ------------------------------------------------------------------------------------
+VKRAY_CONST(uint, kWorkgroupSizeX, 8u);
+VKRAY_CONST(uint, kWorkgroupSizeY, 8u);
+
+// ---- Descriptor bindings (set 0) -----------------------------------------------------------------
+VKRAY_CONST(uint, kBindingFrame, 0u);        // uniform FrameParams
+VKRAY_CONST(uint, kBindingMaterials, 1u);    // Material[]
+VKRAY_CONST(uint, kBindingLights, 2u);       // Light[]
+VKRAY_CONST(uint, kBindingSpheres, 3u);      // Sphere[]
+VKRAY_CONST(uint, kBindingPlanes, 4u);       // Plane[]
+VKRAY_CONST(uint, kBindingTriangles, 5u);    // Triangle[]
+VKRAY_CONST(uint, kBindingPolygons, 6u);     // Polygon[]
+VKRAY_CONST(uint, kBindingPolyVertices, 7u); // vec4[] polygon vertices (xyz)
+VKRAY_CONST(uint, kBindingNormals, 8u);      // vec4[] shading normals, 3 per smooth triangle
+VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // BvhNode[]
+VKRAY_CONST(uint, kBindingPrimRefs, 10u);    // uint[] BVH leaf references (kind << 30 | index)
+VKRAY_CONST(uint, kBindingImage, 11u);       // vec4[] linear RGB, row-major, width * height
+VKRAY_CONST(uint, kBindingStats, 12u);       // RayStats
+VKRAY_CONST(uint, kBindingPrevImage, 13u);   // vec4[] copy of the image read by the refine pass
+VKRAY_CONST(uint, kBindingCount, 14u);
+
+// ---- Specialization constants (ids) --------------------------------------------------------------
+// Each switches code on or off at pipeline creation, so the driver compiles out absent effects.
+VKRAY_CONST(uint, kSpecHasSpheres, 0u);
+VKRAY_CONST(uint, kSpecHasPlanes, 1u);
+VKRAY_CONST(uint, kSpecHasTriangles, 2u);
+VKRAY_CONST(uint, kSpecHasPolygons, 3u);
+VKRAY_CONST(uint, kSpecUseBvh, 4u);
+VKRAY_CONST(uint, kSpecShadows, 5u);
+VKRAY_CONST(uint, kSpecReflection, 6u);
+VKRAY_CONST(uint, kSpecRefraction, 7u);
+VKRAY_CONST(uint, kSpecStackSize, 8u);       // pending branches of the Whitted tree (>= 1)
+VKRAY_CONST(uint, kSpecCountStats, 9u);
+VKRAY_CONST(uint, kSpecNumerics, 10u);       // kNumericsRobust / kNumericsNaive
+VKRAY_CONST(uint, kSpecFresnel, 11u);        // kFresnelExact / kFresnelSchlick
+VKRAY_CONST(uint, kSpecShadowMode, 12u);     // kShadowsOpaque / kShadowsAttenuated
+VKRAY_CONST(uint, kSpecChecker, 13u);        // any material has a checker
+VKRAY_CONST(uint, kSpecSmoothNormals, 14u);  // any triangle has shading normals
+VKRAY_CONST(uint, kSpecCount, 15u);
+
+VKRAY_CONST(uint, kNumericsRobust, 0u);
+VKRAY_CONST(uint, kNumericsNaive, 1u);
+VKRAY_CONST(uint, kFresnelExact, 0u);
+VKRAY_CONST(uint, kFresnelSchlick, 1u);
+VKRAY_CONST(uint, kShadowsOpaque, 0u);
+VKRAY_CONST(uint, kShadowsAttenuated, 1u);
+
+// ---- Limits shared by host validation and shader arrays ------------------------------------------
+VKRAY_CONST(uint, kMaxStackSize, 16u);      // deepest explicit stack compiled into a pipeline
+VKRAY_CONST(uint, kMaxMediaDepth, 4u);      // nested transmissive media tracked per ray
+VKRAY_CONST(uint, kNoMedium, 0xFFFFu);      // empty slot in the packed media stack
+VKRAY_CONST(uint, kMaxMaterials, 65535u);   // material ids are packed in 16 bits
+VKRAY_CONST(uint, kNoNormals, 0xFFFFFFFFu); // Triangle.v1.w: flat triangle
+VKRAY_CONST(float, kNaiveEpsilon, 1e-4);    // the textbook fixed t-epsilon of naive numerics
+
+// BVH leaf references pack the primitive kind into the top two bits.
+VKRAY_CONST(uint, kPrimSphere, 0u);
+VKRAY_CONST(uint, kPrimTriangle, 1u);
+VKRAY_CONST(uint, kPrimPolygon, 2u);
+VKRAY_CONST(uint, kPrimKindShift, 30u);
+VKRAY_CONST(uint, kPrimIndexMask, 0x3FFFFFFFu);
+VKRAY_CONST(uint, kPrimPlane, 3u); // never in the BVH; used to tag hits
+
+// ---- Render passes (push constant `pass`) and flags -----------------------------------------------
+// The image holds, per pixel, vec4(sum of sample radiances, sample count); the host divides.
+VKRAY_CONST(uint, kPassSample, 0u);  // sampleCount samples per pixel (sampleBase, sampleBase + 1, ...)
+VKRAY_CONST(uint, kPassRefine, 1u);  // adaptive AA: resample pixels whose neighbours differ
+VKRAY_CONST(uint, kFlagCenterSample, 1u); // the single sample goes through the pixel centre
+VKRAY_CONST(uint, kFlagAccumulate, 2u);   // add to the sums already in the image
+
+// ---- Buffer structs ------------------------------------------------------------------------------
+struct Material {
+  vec4 color;        // rgb: base colour (linear); a: ambient coefficient
+  vec4 color2;       // rgb: checker's second colour; a: checker square size (0: no checker)
+  vec4 phong;        // x: diffuse, y: specular, z: shininess (Phong exponent), w: reflection 0..1
+  vec4 transmission; // x: transmission 0..1, y: index of refraction, zw: unused
+  vec4 absorption;   // rgb: Beer-Lambert absorption per unit length; a: unused
+};
+
+struct Light {
+  vec4 position; // xyz: position (camera-relative); w: 1 if it casts shadows, else 0
+  vec4 color;    // rgb: intensity (linear); a: unused
+};
+
+struct Sphere {
+  vec4 centerRadius; // xyz: centre (camera-relative); w: radius
+  uvec4 meta;        // x: material; yzw: unused
+};
+
+struct Plane {
+  vec4 normalOffset; // xyz: unit normal n; w: D in n.x + D = 0 (camera-relative)
+  uvec4 meta;        // x: material; yzw: unused
+};
+
+struct Triangle {
+  vec4 v0; // xyz: vertex 0; w: material id (uintBitsToFloat)
+  vec4 v1; // xyz: vertex 1; w: first of 3 shading normals in Normals[] or kNoNormals (bits)
+  vec4 v2; // xyz: vertex 2; w: unused
+};
+
+struct Polygon {
+  vec4 plane; // xyz: unit normal; w: D (n.x + D = 0)
+  uvec4 meta; // x: first vertex in PolyVertices[]; y: vertex count; z: material; w: unused
+};
+
+// Flattened BVH node (pbrt's LinearBVHNode layout): depth first, the first child follows its
+// parent, so an interior node stores only the index of its second child.
+struct BvhNode {
+  vec3 boundsMin;
+  uint offset;     // leaf: first PrimRef; interior: index of the second child
+  vec3 boundsMax;
+  uint countAxis;  // bits 0..15: primitive count (0: interior); bits 16..17: split axis
+};
+
+struct FrameParams {
+  vec4 cameraForward; // xyz: unit view direction
+  vec4 cameraRight;   // xyz: right * tan(fov_y / 2) * aspect
+  vec4 cameraUp;      // xyz: up * tan(fov_y / 2)
+  vec4 cameraOrigin;  // xyz: eye position (camera-relative frame: 0); w: unused
+  vec4 worldOffset;   // xyz: world position of the frame's origin (checker patterns use world space)
+  vec4 background;    // rgb: colour of rays that miss
+  vec4 ambientLight;  // rgb: global ambient light
+  vec4 knobs;         // x: bailout weight; y: adaptive AA threshold; zw: unused
+  uvec4 imageSize;    // x: width; y: height; z: unused; w: max depth (bounces after the eye ray)
+  uvec4 counts;       // x: spheres; y: planes; z: triangles; w: polygons
+  uvec4 counts2;      // x: lights; y: BVH nodes; zw: unused
+};
+
+struct RayStats {
+  uint eyeRays;
+  uint shadowRays;
+  uint reflectionRays;
+  uint refractionRays;
+  uint bailoutSaved;   // branches not traced because their weight fell below the bailout
+  uint stackOverflow;  // branches dropped because the explicit stack was full
+  uint maxDepth;       // deepest bounce traced
+  uint refinedPixels;  // adaptive AA: pixels supersampled
+  uint nonFinite;      // samples whose radiance was NaN/Inf (replaced by black); expected 0
+  uint pad0;
+  uint pad1;
+  uint pad2;
+};
+
+// The image buffers hold a window of whole rows: Image[] starts at row imageRow0 and PrevImage[] at
+// row prevRow0, so images larger than one storage buffer can be traced band by band.
+struct PushConstants {
+  uvec2 tileOrigin; // first pixel of this dispatch
+  uvec2 tileSize;   // pixels covered by this dispatch
+  uint pass;        // kPassSample / kPassRefine
+  uint sampleBase;  // index of the first sample in the per-pixel sequence
+  uint sampleCount; // samples per pixel in this dispatch
+  uint flags;       // kFlagCenterSample | kFlagAccumulate
+  uint imageRow0;   // image row held by Image[0]
+  uint prevRow0;    // image row held by PrevImage[0]
+  uint prevRows;    // rows held by PrevImage[]
+  uint pad0;
+};
+
+// ---- Probe kernel (shaders/probe.comp): the shaders/lib functions on arrays of test rays ---------
+VKRAY_CONST(uint, kProbeBindingQueries, 0u);
+VKRAY_CONST(uint, kProbeBindingResults, 1u);
+VKRAY_CONST(uint, kProbeBindingVertices, 2u);
+
+VKRAY_CONST(uint, kProbeSphere, 0u);   // a: centre, radius
+VKRAY_CONST(uint, kProbePlane, 1u);    // a: normal, D
+VKRAY_CONST(uint, kProbeTriangle, 2u); // a, b, c: vertices
+VKRAY_CONST(uint, kProbePolygon, 3u);  // a: normal; op.z/op.w: first vertex, count in Vertices[]
+VKRAY_CONST(uint, kProbeSpawn, 4u);    // origin: p; dir: side normal; a.x: error bound
+VKRAY_CONST(uint, kProbeDielectric, 5u); // dir: incident; a: shading normal (facing); b: geometric
+                                         // normal (facing); c.x, c.y: n1, n2; op.z: 1 = Schlick
+
+struct ProbeQuery {
+  vec4 origin; // xyz: ray origin; w: tMax (0: unbounded)
+  vec4 dir;    // xyz: ray direction
+  vec4 a;
+  vec4 b;
+  vec4 c;
+  uvec4 op;    // x: kProbe* operation; y: kNumerics*; z, w: per operation
+};
+
+struct ProbeResult {
+  vec4 hit;      // x: t (-1: miss); yzw: barycentrics (triangles). Dielectric: x: Fresnel
+  vec4 point;    // xyz: surface point; w: error bound. Dielectric: xyz: refracted direction
+  vec4 normal;   // xyz: geometric normal as stored. Dielectric: xyz: mirror direction
+  vec4 spawnOut; // xyz: origin for a ray leaving on the incoming side (shadow, reflection)
+  vec4 spawnIn;  // xyz: origin for a ray continuing through the surface (refraction)
+};
+
+#ifdef __cplusplus
+} // namespace vkray::gpu
+#endif
+#undef VKRAY_CONST
+#endif

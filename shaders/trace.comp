@@ -1,0 +1,259 @@
+// The renderer's kernel: one invocation per pixel generates its eye rays, follows each one's Whitted
+// ray tree (mirror reflection and dielectric reflection + refraction) with an explicit stack, and
+// writes the sum of its samples' radiance. Effects the scene lacks are specialized away.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/gpu_types.h"
+
+layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_size_z = 1) in;
+
+#include "lib/sampling.glsl"
+#include "lib/shade.glsl"
+
+layout(std430, binding = kBindingImage) buffer ImageBuffer { vec4 image[]; };
+layout(std430, binding = kBindingPrevImage) readonly buffer PrevImageBuffer { vec4 prevImage[]; };
+layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
+layout(push_constant) uniform Push { PushConstants pc; };
+
+// Per-invocation counters (gShadowRays lives in shade.glsl).
+uint gEyeRays = 0u;
+uint gReflectionRays = 0u;
+uint gRefractionRays = 0u;
+uint gBailoutSaved = 0u;
+uint gStackOverflow = 0u;
+uint gMaxDepth = 0u;
+uint gRefinedPixels = 0u;
+uint gNonFinite = 0u;
+
+const uint kRayEye = 0u;
+const uint kRayReflection = 1u;
+const uint kRayRefraction = 2u;
+
+// A branch of the ray tree waiting to be traced.
+struct PendingRay {
+  vec3 origin;
+  uint depthKind; // bits 0..15: depth (bounces so far); bits 16..17: kRay* kind
+  vec3 dir;
+  vec3 weight;    // product of reflection/transmission factors and absorption along the path
+  uvec2 media;    // media stack (shade.glsl)
+};
+
+void countRay(uint kind, uint depth) {
+  if (!COUNT_STATS) return;
+  if (kind == kRayEye) gEyeRays++;
+  else if (kind == kRayReflection) gReflectionRays++;
+  else gRefractionRays++;
+  gMaxDepth = max(gMaxDepth, depth);
+}
+
+// A branch is worth tracing when its weight is positive and not below the bailout (POV-Ray's
+// adc_bailout). A zero weight is never traced, even with bailout 0, so an all-features pipeline
+// and a specialized one follow exactly the same branches.
+bool worthTracing(vec3 weight) {
+  float w = maxComponent(weight);
+  return w > 0.0 && w >= frame.knobs.x;
+}
+
+// Radiance along one eye ray: the whole Whitted tree, depth first. At a dielectric both children
+// are live; the refracted one is followed at once and the reflected one waits on the stack, so at
+// most one branch per level waits: STACK_SIZE = max_depth never overflows (the host caps it at
+// kMaxStackSize; deeper trees drop and count the extra branches).
+vec3 traceRadiance(vec3 origin, vec3 dir) {
+  vec3 radiance = vec3(0.0);
+  PendingRay stack[STACK_SIZE];
+  int sp = 0;
+  PendingRay cur = PendingRay(origin, kRayEye << 16u, dir, vec3(1.0), kEmptyMedia);
+  uint maxDepth = frame.imageSize.w;
+  while (true) {
+    uint depth = cur.depthKind & 0xFFFFu;
+    countRay(cur.depthKind >> 16u, depth);
+    TraceRay r = makeTraceRay(cur.origin, cur.dir);
+    Hit hit = traceScene(r, kInfinity, false);
+    vec3 w = cur.weight;
+    uint medium = REFRACTION ? mediaTop(cur.media) : kNoMedium;
+    if (REFRACTION && medium != kNoMedium) w *= beerLambert(materials[medium].absorption.rgb, hit.t);
+
+    bool haveNext = false;
+    if (hit.kind == kNoHit) {
+      radiance += w * frame.background.rgb;
+    } else {
+      Surface s = surfaceAt(r, hit);
+      Material mat = materials[s.material];
+      bool front = dot(s.ng, cur.dir) < 0.0;
+      vec3 ngf = front ? s.ng : -s.ng;
+      vec3 nsf = front ? s.ns : -s.ns;
+      radiance += w * localShade(mat, s, ngf, nsf, cur.dir);
+
+      if ((REFLECTION || REFRACTION) && depth < maxDepth) {
+        float kr = mat.phong.w;
+        float kt = 0.0;
+        vec3 tdir = vec3(0.0);
+        uvec2 tmedia = cur.media;
+        if (REFRACTION && mat.transmission.x > 0.0) {
+          float trans = mat.transmission.x;
+          float n1, n2;
+          if (front) {
+            n1 = mediumIor(medium);
+            n2 = mat.transmission.y;
+            tmedia = mediaPush(cur.media, s.material);
+          } else {
+            n1 = mat.transmission.y;
+            tmedia = mediaRemove(cur.media, s.material);
+            n2 = mediumIor(mediaTop(tmedia));
+          }
+          DielectricSplit split = dielectricSplit(cur.dir, nsf, ngf, n1, n2, FRESNEL == kFresnelSchlick);
+          // Total internal reflection gives all of the transmitted share to the reflected branch.
+          kr += trans * split.fresnel;
+          kt = trans * (1.0 - split.fresnel);
+          tdir = split.refracted;
+        }
+        vec3 wr = w * kr;
+        vec3 wt = w * kt;
+        bool doR = worthTracing(wr);
+        bool doT = worthTracing(wt);
+        if (COUNT_STATS) {
+          if (!doR && maxComponent(wr) > 0.0) gBailoutSaved++;
+          if (!doT && maxComponent(wt) > 0.0) gBailoutSaved++;
+        }
+        uint nextDepth = depth + 1u;
+        PendingRay reflected;
+        if (doR) {
+          vec3 ro = ROBUST ? spawnOrigin(s.p, ngf, s.errorBound) : s.p;
+          reflected = PendingRay(ro, nextDepth | (kRayReflection << 16u), mirrorDirection(cur.dir, nsf, ngf), wr,
+                                 cur.media);
+        }
+        if (doT) {
+          vec3 to = ROBUST ? spawnOrigin(s.p, -ngf, s.errorBound) : s.p;
+          if (doR) {
+            if (sp < STACK_SIZE) {
+              stack[sp++] = reflected;
+            } else if (COUNT_STATS) {
+              gStackOverflow++;
+            }
+          }
+          cur = PendingRay(to, nextDepth | (kRayRefraction << 16u), tdir, wt, tmedia);
+          haveNext = true;
+        } else if (doR) {
+          cur = reflected;
+          haveNext = true;
+        }
+      }
+    }
+    if (!haveNext) {
+      if (sp == 0) break;
+      cur = stack[--sp];
+    }
+  }
+  return radiance;
+}
+
+// Eye ray through a point of the image plane given in pixels (x right, y down, (0,0) top-left).
+vec3 eyeRayDir(vec2 pixelPos) {
+  vec2 size = vec2(frame.imageSize.xy);
+  float x = 2.0 * pixelPos.x / size.x - 1.0;
+  float y = 1.0 - 2.0 * pixelPos.y / size.y;
+  return normalize(frame.cameraForward.xyz + x * frame.cameraRight.xyz + y * frame.cameraUp.xyz);
+}
+
+vec3 traceSample(uvec2 pixel, vec2 offset) {
+  vec3 radiance = traceRadiance(frame.cameraOrigin.xyz, eyeRayDir(vec2(pixel) + offset));
+  if (!isFiniteVec(radiance)) {
+    if (COUNT_STATS) gNonFinite++;
+    radiance = vec3(0.0);
+  }
+  return radiance;
+}
+
+// Sum of `count` samples starting at `base` in the pixel's sequence.
+vec3 sampleSum(uvec2 pixel, uint pixelIndex, uint base, uint count, bool center) {
+  vec3 sum = vec3(0.0);
+  for (uint k = 0u; k < count; ++k) {
+    vec2 offset = center ? vec2(0.5) : sobolOwenSample(base + k, hashPcg(pixelIndex));
+    sum += traceSample(pixel, offset);
+  }
+  return sum;
+}
+
+vec3 averaged(vec4 v) { return v.w > 0.0 ? v.rgb / v.w : vec3(0.0); }
+
+// Adaptive antialiasing (POV-Ray's +A): resample a pixel when its colour differs from a neighbour's
+// by more than the threshold in some channel (colours clamped to [0, 1], as they will be displayed).
+vec4 prevPixel(uvec2 p) { return prevImage[(p.y - pc.prevRow0) * frame.imageSize.x + p.x]; }
+
+bool needsRefinement(uvec2 pixel) {
+  uvec2 size = frame.imageSize.xy;
+  vec3 c = clamp(averaged(prevPixel(pixel)), 0.0, 1.0);
+  ivec2 offsets[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
+  for (int i = 0; i < 4; ++i) {
+    ivec2 q = ivec2(pixel) + offsets[i];
+    if (q.x < 0 || q.y < 0 || q.x >= int(size.x) || q.y >= int(size.y)) continue;
+    // Rows outside the uploaded window (never the case for the host's bands) are skipped.
+    if (uint(q.y) < pc.prevRow0 || uint(q.y) >= pc.prevRow0 + pc.prevRows) continue;
+    vec3 n = clamp(averaged(prevPixel(uvec2(q))), 0.0, 1.0);
+    if (maxComponent(abs(n - c)) > frame.knobs.y) return true;
+  }
+  return false;
+}
+
+shared uint sCounters[10];
+
+// One atomic per counter per workgroup: invocations add into shared memory, invocation 0 flushes.
+void flushStats() {
+  if (!COUNT_STATS) return;
+  bool first = gl_LocalInvocationIndex == 0u;
+  if (first) {
+    for (int i = 0; i < 10; ++i) sCounters[i] = 0u;
+  }
+  barrier();
+  if (gEyeRays != 0u) atomicAdd(sCounters[0], gEyeRays);
+  if (gShadowRays != 0u) atomicAdd(sCounters[1], gShadowRays);
+  if (gReflectionRays != 0u) atomicAdd(sCounters[2], gReflectionRays);
+  if (gRefractionRays != 0u) atomicAdd(sCounters[3], gRefractionRays);
+  if (gBailoutSaved != 0u) atomicAdd(sCounters[4], gBailoutSaved);
+  if (gStackOverflow != 0u) atomicAdd(sCounters[5], gStackOverflow);
+  if (gMaxDepth != 0u) atomicMax(sCounters[6], gMaxDepth);
+  if (gRefinedPixels != 0u) atomicAdd(sCounters[7], gRefinedPixels);
+  if (gNonFinite != 0u) atomicAdd(sCounters[8], gNonFinite);
+  barrier();
+  if (first) {
+    if (sCounters[0] != 0u) atomicAdd(stats.eyeRays, sCounters[0]);
+    if (sCounters[1] != 0u) atomicAdd(stats.shadowRays, sCounters[1]);
+    if (sCounters[2] != 0u) atomicAdd(stats.reflectionRays, sCounters[2]);
+    if (sCounters[3] != 0u) atomicAdd(stats.refractionRays, sCounters[3]);
+    if (sCounters[4] != 0u) atomicAdd(stats.bailoutSaved, sCounters[4]);
+    if (sCounters[5] != 0u) atomicAdd(stats.stackOverflow, sCounters[5]);
+    if (sCounters[6] != 0u) atomicMax(stats.maxDepth, sCounters[6]);
+    if (sCounters[7] != 0u) atomicAdd(stats.refinedPixels, sCounters[7]);
+    if (sCounters[8] != 0u) atomicAdd(stats.nonFinite, sCounters[8]);
+  }
+}
+
+void main() {
+  uvec2 local = gl_GlobalInvocationID.xy;
+  uvec2 pixel = pc.tileOrigin + local;
+  // The dispatch is rounded up to whole workgroups: invocations past the tile or image do nothing,
+  // but still reach flushStats' barriers.
+  bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize.xy));
+  if (inside) {
+    uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
+    uint slot = (pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x;
+    if (pc.pass == kPassRefine) {
+      // Refined pixels get spp fresh samples; the others keep their base sample.
+      if (needsRefinement(pixel)) {
+        if (COUNT_STATS) gRefinedPixels++;
+        image[slot] = vec4(sampleSum(pixel, index, pc.sampleBase, pc.sampleCount, false),
+                           float(pc.sampleCount));
+      } else {
+        image[slot] = prevPixel(pixel);
+      }
+    } else {
+      bool center = (pc.flags & kFlagCenterSample) != 0u;
+      vec4 result = vec4(sampleSum(pixel, index, pc.sampleBase, pc.sampleCount, center),
+                         float(pc.sampleCount));
+      if ((pc.flags & kFlagAccumulate) != 0u) result += image[slot];
+      image[slot] = result;
+    }
+  }
+  flushStats();
+}
