@@ -64,22 +64,22 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   PendingRay stack[STACK_SIZE];
   int sp = 0;
   PendingRay cur = PendingRay(origin, kRayEye << 16u, dir, vec3(1.0), kEmptyMedia);
-  uint maxDepth = frame.imageSize.w;
+  uint maxDepth = opaqueUniform(frame.imageSize.w);
   while (true) {
     uint depth = cur.depthKind & 0xFFFFu;
     countRay(cur.depthKind >> 16u, depth);
     TraceRay r = makeTraceRay(cur.origin, cur.dir);
-    Hit hit = traceScene(r, kInfinity, false);
+    Hit hit = traceScene(r, kInfinity, false, false);
     vec3 w = cur.weight;
     uint medium = REFRACTION ? mediaTop(cur.media) : kNoMedium;
-    if (REFRACTION && medium != kNoMedium) w *= beerLambert(materials[medium].absorption.rgb, hit.t);
+    if (REFRACTION && medium != kNoMedium) w *= beerLambert(loadMaterial(medium).absorption.rgb, hit.t);
 
     bool haveNext = false;
     if (hit.kind == kNoHit) {
       radiance += w * frame.background.rgb;
     } else {
       Surface s = surfaceAt(r, hit);
-      Material mat = materials[s.material];
+      Material mat = loadMaterial(s.material);
       bool front = dot(s.ng, cur.dir) < 0.0;
       vec3 ngf = front ? s.ng : -s.ng;
       vec3 nsf = front ? s.ns : -s.ns;
@@ -109,12 +109,14 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           tdir = split.refracted;
         }
         vec3 wr = w * kr;
-        vec3 wt = w * kt;
         bool doR = worthTracing(wr);
-        bool doT = worthTracing(wt);
-        if (COUNT_STATS) {
-          if (!doR && maxComponent(wr) > 0.0) gBailoutSaved++;
-          if (!doT && maxComponent(wt) > 0.0) gBailoutSaved++;
+        if (COUNT_STATS && !doR && maxComponent(wr) > 0.0) gBailoutSaved++;
+        vec3 wt = vec3(0.0);
+        bool doT = false;
+        if (REFRACTION) {
+          wt = w * kt;
+          doT = worthTracing(wt);
+          if (COUNT_STATS && !doT && maxComponent(wt) > 0.0) gBailoutSaved++;
         }
         uint nextDepth = depth + 1u;
         PendingRay reflected;
@@ -123,7 +125,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           reflected = PendingRay(ro, nextDepth | (kRayReflection << 16u), mirrorDirection(cur.dir, nsf, ngf), wr,
                                  cur.media);
         }
-        if (doT) {
+        if (REFRACTION && doT) {
           vec3 to = ROBUST ? spawnOrigin(s.p, -ngf, s.errorBound) : s.p;
           if (doR) {
             if (sp < STACK_SIZE) {
@@ -141,7 +143,8 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
       }
     }
     if (!haveNext) {
-      if (sp == 0) break;
+      // Without refraction nothing is ever pushed: the stack code compiles out.
+      if (!REFRACTION || sp == 0) break;
       cur = stack[--sp];
     }
   }
@@ -169,7 +172,7 @@ vec3 traceSample(uvec2 pixel, vec2 offset) {
 vec3 sampleSum(uvec2 pixel, uint pixelIndex, uint base, uint count, bool center) {
   vec3 sum = vec3(0.0);
   for (uint k = 0u; k < count; ++k) {
-    vec2 offset = center ? vec2(0.5) : sobolOwenSample(base + k, hashPcg(pixelIndex));
+    vec2 offset = (CENTER_SAMPLE || center) ? vec2(0.5) : sobolOwenSample(base + k, hashPcg(pixelIndex));
     sum += traceSample(pixel, offset);
   }
   return sum;
@@ -230,6 +233,7 @@ void flushStats() {
 }
 
 void main() {
+  gDynamicZero = stats.pad0;
   uvec2 local = gl_GlobalInvocationID.xy;
   uvec2 pixel = pc.tileOrigin + local;
   // The dispatch is rounded up to whole workgroups: invocations past the tile or image do nothing,
@@ -238,20 +242,20 @@ void main() {
   if (inside) {
     uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
     uint slot = (pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x;
-    if (pc.pass == kPassRefine) {
+    if (opaqueUniform(pc.pass) == kPassRefine) {
       // Refined pixels get spp fresh samples; the others keep their base sample.
       if (needsRefinement(pixel)) {
         if (COUNT_STATS) gRefinedPixels++;
-        image[slot] = vec4(sampleSum(pixel, index, pc.sampleBase, pc.sampleCount, false),
+        image[slot] = vec4(sampleSum(pixel, index, pc.sampleBase, opaqueUniform(pc.sampleCount), false),
                            float(pc.sampleCount));
       } else {
         image[slot] = prevPixel(pixel);
       }
     } else {
-      bool center = (pc.flags & kFlagCenterSample) != 0u;
-      vec4 result = vec4(sampleSum(pixel, index, pc.sampleBase, pc.sampleCount, center),
+      bool center = (opaqueUniform(pc.flags) & kFlagCenterSample) != 0u;
+      vec4 result = vec4(sampleSum(pixel, index, pc.sampleBase, opaqueUniform(pc.sampleCount), center),
                          float(pc.sampleCount));
-      if ((pc.flags & kFlagAccumulate) != 0u) result += image[slot];
+      if ((opaqueUniform(pc.flags) & kFlagAccumulate) != 0u) result += image[slot];
       image[slot] = result;
     }
   }

@@ -4,6 +4,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "app/bench.h"
 #include "app/commands.h"
 #include "util/error.h"
 
@@ -22,8 +23,23 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--no-specialize", render.noSpecialize, "compile every feature in (for comparison)");
   renderCmd->add_option("--band-ms", render.bandMs, "target GPU time per submission in ms (watchdog safety)")
       ->check(CLI::Range(1.0, 10000.0));
+  renderCmd->add_option("--scene-memory", render.sceneMemory,
+                        "where the kernel reads small scenes from: auto, uniform or storage buffers")
+      ->check(CLI::IsMember({"auto", "uniform", "storage"}));
   addRenderFlags(*renderCmd, render.render);
   addDeviceFlags(*renderCmd, render.device);
+
+  auto* benchCmd = app.add_subcommand("bench", "benchmarks that print figures and ratios");
+  benchCmd->require_subcommand(1);
+  BenchTimeArgs benchTime;
+  auto* benchTimeCmd = benchCmd->add_subcommand("time", "median GPU trace time of repeated renders");
+  benchTimeCmd->add_option("scenes", benchTime.scenes, "scene files")->required();
+  benchTimeCmd->add_option("--runs", benchTime.runs, "timed runs per scene (after one warm-up)")->check(CLI::Range(1, 1000));
+  benchTimeCmd->add_flag("--no-specialize", benchTime.noSpecialize, "compile every feature in");
+  benchTimeCmd->add_option("--scene-memory", benchTime.sceneMemory, "auto, uniform or storage")
+      ->check(CLI::IsMember({"auto", "uniform", "storage"}));
+  addRenderFlags(*benchTimeCmd, benchTime.render);
+  addDeviceFlags(*benchTimeCmd, benchTime.device);
 
   DeviceFlags infoFlags;
   auto* infoCmd = app.add_subcommand("info", "list Vulkan devices and the features vkray uses");
@@ -34,6 +50,7 @@ int main(int argc, char** argv) {
   try {
     if (*renderCmd) return runRender(render);
     if (*infoCmd) return runInfo(infoFlags);
+    if (*benchTimeCmd) return runBenchTime(benchTime);
   } catch (const CancelledError&) {
     std::fprintf(stderr, "vkray: interrupted; no output written\n");
     return 130;

@@ -57,6 +57,9 @@ int runRender(const RenderArgs& args) {
   options.specialize = !args.noSpecialize;
   options.countStats = args.stats;
   options.bandBudgetMs = args.bandMs;
+  options.sceneMemory = args.sceneMemory == "uniform"   ? SceneMemory::Uniform
+                        : args.sceneMemory == "storage" ? SceneMemory::Storage
+                                                        : SceneMemory::Auto;
   options.cancel = &interrupted;
   options.progress = [&](const RenderProgress& p) { bar.update(p); };
   RenderResult result = renderer.render(scene.camera, scene.render, options);
@@ -84,6 +87,7 @@ int runRender(const RenderArgs& args) {
     std::printf("spp: %d\n", scene.render.spp);
     std::printf("max depth: %d\n", scene.render.maxDepth);
     for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
+    std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers" : "storage buffers");
     printStat("load", loadMs);
     if (renderer.gpuScene().bvh.stats.nodes > 0) {
       const auto& b = renderer.gpuScene().bvh.stats;

@@ -21,6 +21,7 @@ static_assert(sizeof(FrameParams) == 11 * 16);
 static_assert(offsetof(FrameParams, knobs) == 112 && offsetof(FrameParams, imageSize) == 128);
 static_assert(offsetof(FrameParams, counts) == 144 && offsetof(FrameParams, counts2) == 160);
 static_assert(sizeof(RayStats) == 48);
+static_assert(sizeof(SceneUbo) <= 65536, "the packed scene must fit the smallest maxUniformBufferRange");
 static_assert(sizeof(PushConstants) == 48 && offsetof(PushConstants, pass) == 16 &&
               offsetof(PushConstants, imageRow0) == 32);
 static_assert(sizeof(PushConstants) <= 128, "Vulkan guarantees 128 bytes of push constants");

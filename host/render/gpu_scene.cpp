@@ -4,6 +4,8 @@
 #include <bit>
 #include <cmath>
 
+#include "scene/features.h"
+
 namespace vkray {
 
 namespace {
@@ -51,10 +53,17 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
   for (const Sphere& s : scene.spheres) {
     g.spheres.push_back(gpu::Sphere{glm::vec4(rel(s.center, origin), static_cast<float>(s.radius)), glm::uvec4(s.material, 0, 0, 0)});
   }
-  for (const Plane& p : scene.planes) {
-    // n.(x_rel + origin) + D = 0  =>  n.x_rel + (D + n.origin) = 0
-    double d = p.offset + glm::dot(p.normal, origin);
-    g.planes.push_back(gpu::Plane{glm::vec4(glm::vec3(p.normal), static_cast<float>(d)), glm::uvec4(p.material, 0, 0, 0)});
+  // Planes that can cast shadows go first: shadow rays test only those (features.h).
+  std::vector<bool> occluding = planesThatCanOcclude(scene);
+  for (int pass = 0; pass < 2; ++pass) {
+    for (std::size_t i = 0; i < scene.planes.size(); ++i) {
+      if (occluding[i] != (pass == 0)) continue;
+      const Plane& p = scene.planes[i];
+      // n.(x_rel + origin) + D = 0  =>  n.x_rel + (D + n.origin) = 0
+      double d = p.offset + glm::dot(p.normal, origin);
+      g.planes.push_back(gpu::Plane{glm::vec4(glm::vec3(p.normal), static_cast<float>(d)), glm::uvec4(p.material, 0, 0, 0)});
+      if (pass == 0) ++g.occluderPlanes;
+    }
   }
   for (const Polygon& poly : scene.polygons) {
     auto first = static_cast<std::uint32_t>(g.polyVertices.size());

@@ -20,11 +20,18 @@ double msSince(Clock::time_point t) { return std::chrono::duration<double, std::
 // Bytes of image window the renderer allows itself: bands of rows are traced into it and read back.
 constexpr vk::DeviceSize kImageWindowBudget = 64ull << 20;
 
+bool isUniformBinding(std::uint32_t b) { return b == gpu::kBindingFrame || b == gpu::kBindingSceneUbo; }
+
 template <typename T> void uploadArray(std::unique_ptr<vulkan::Buffer>& buffer, const vulkan::Context& ctx,
                                        const std::vector<T>& data, const std::string& name) {
   buffer = std::make_unique<vulkan::Buffer>(ctx, data.size() * sizeof(T), vk::BufferUsageFlagBits::eStorageBuffer,
                                             vulkan::MemoryUse::DeviceLocal, name);
   buffer->write(data.data(), data.size() * sizeof(T));
+}
+
+// Copies an array into its slot of the packed SceneUbo.
+template <typename T, std::size_t N> void packUniform(T (&slot)[N], const std::vector<T>& data) {
+  std::copy(data.begin(), data.end(), slot);
 }
 
 } // namespace
@@ -47,14 +54,14 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
   vulkan::vulkanStep("creating the renderer's layouts", [&] {
     std::vector<vk::DescriptorSetLayoutBinding> bindings;
     for (std::uint32_t b = 0; b < gpu::kBindingCount; ++b) {
-      auto type = b == gpu::kBindingFrame ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
+      auto type = isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
       bindings.emplace_back(b, type, 1, vk::ShaderStageFlagBits::eCompute);
     }
     setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
     vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::PushConstants));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, push));
-    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 1),
+    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
                                                 vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount)};
     descriptorPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
@@ -95,12 +102,43 @@ void Renderer::setScene(const Scene& scene) {
   uploadArray(sceneBuffers_[gpu::kBindingNormals], context_, g.normals, "shading normals");
   uploadArray(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvh.nodes, "BVH nodes");
   uploadArray(sceneBuffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, "BVH primitive references");
+  sceneFitsUbo_ = g.materials.size() <= gpu::kUboMaterials && g.lights.size() <= gpu::kUboLights &&
+                  g.spheres.size() <= gpu::kUboSpheres && g.planes.size() <= gpu::kUboPlanes &&
+                  g.triangles.size() <= gpu::kUboTriangles && g.polygons.size() <= gpu::kUboPolygons &&
+                  g.polyVertices.size() <= gpu::kUboPolyVertices;
+  // The uniform copy always exists at full size (the shader declares fixed arrays); it is filled
+  // only when the scene fits.
+  auto packed = std::make_unique<gpu::SceneUbo>();
+  if (sceneFitsUbo_) {
+    packUniform(packed->materials, g.materials);
+    packUniform(packed->lights, g.lights);
+    packUniform(packed->spheres, g.spheres);
+    packUniform(packed->planes, g.planes);
+    packUniform(packed->triangles, g.triangles);
+    packUniform(packed->polygons, g.polygons);
+    packUniform(packed->polyVertices, g.polyVertices);
+  }
+  sceneBuffers_[gpu::kBindingSceneUbo] = std::make_unique<vulkan::Buffer>(
+      context_, sizeof(gpu::SceneUbo), vk::BufferUsageFlagBits::eUniformBuffer, vulkan::MemoryUse::DeviceLocal,
+      "small scene (uniform)");
+  sceneBuffers_[gpu::kBindingSceneUbo]->write(packed.get(), sizeof(gpu::SceneUbo));
   uploadMs_ = msSince(start);
   image_.reset(); // descriptors are rewritten once the image window exists
 }
 
+bool Renderer::useUniformScene(const RenderOptions& o) const {
+  switch (o.sceneMemory) {
+  case SceneMemory::Uniform:
+    if (!sceneFitsUbo_) throw InputError("--scene-memory", "the scene's arrays exceed the uniform-buffer capacities");
+    return true;
+  case SceneMemory::Storage: return false;
+  case SceneMemory::Auto: break;
+  }
+  return sceneFitsUbo_ && context_.info().type == "CPU";
+}
+
 vulkan::Specialization Renderer::specializationFor(const Features& f, const RenderSettings& s,
-                                                   const RenderOptions& o) const {
+                                                   const RenderOptions& o, bool centerSample) const {
   vulkan::Specialization spec;
   bool all = !o.specialize;
   spec.set(gpu::kSpecHasSpheres, all || f.spheres);
@@ -119,6 +157,17 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
            s.transmissiveShadows == TransmissiveShadows::Opaque ? gpu::kShadowsOpaque : gpu::kShadowsAttenuated);
   spec.set(gpu::kSpecChecker, all || f.checker);
   spec.set(gpu::kSpecSmoothNormals, all || f.smoothNormals);
+  spec.set(gpu::kSpecSceneInUbo, usesUniformScene_);
+  spec.set(gpu::kSpecCenterSample, centerSample);
+  // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
+  // pipeline keeps every count a runtime value.
+  auto count = [&](std::size_t n) { return (all || n > gpu::kMaxUnrolledCount) ? gpu::kRuntimeCount : static_cast<std::uint32_t>(n); };
+  spec.set(gpu::kSpecSphereCount, f.useBvh ? gpu::kRuntimeCount : count(gpuScene_.spheres.size()));
+  spec.set(gpu::kSpecTriangleCount, f.useBvh ? gpu::kRuntimeCount : count(gpuScene_.triangles.size()));
+  spec.set(gpu::kSpecPolygonCount, f.useBvh ? gpu::kRuntimeCount : count(gpuScene_.polygons.size()));
+  spec.set(gpu::kSpecPlaneCount, count(gpuScene_.planes.size()));
+  spec.set(gpu::kSpecOccluderPlaneCount, count(gpuScene_.occluderPlanes));
+  spec.set(gpu::kSpecLightCount, count(gpuScene_.lights.size()));
   return spec;
 }
 
@@ -165,7 +214,7 @@ void Renderer::updateDescriptors() {
     else if (b == gpu::kBindingStats) handle = stats_->handle();
     else handle = sceneBuffers_[b]->handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
-    auto type = b == gpu::kBindingFrame ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
+    auto type = isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
     writes.emplace_back(*descriptorSet_, b, 0, 1, type, nullptr, &infos[b]);
   }
   context_.device().updateDescriptorSets(writes, {});
@@ -186,14 +235,15 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.imageSize = glm::uvec4(s.width, s.height, 0u, static_cast<std::uint32_t>(f.reflection ? f.usableDepth : 0));
   p.counts = glm::uvec4(gpuScene_.spheres.size(), gpuScene_.planes.size(), gpuScene_.triangles.size(),
                         gpuScene_.polygons.size());
-  p.counts2 = glm::uvec4(gpuScene_.lights.size(), gpuScene_.bvh.nodes.size(), 0u, 0u);
+  p.counts2 = glm::uvec4(gpuScene_.lights.size(), gpuScene_.bvh.nodes.size(), gpuScene_.occluderPlanes, 0u);
   frameBuffer_->write(&p, sizeof p);
   frameWidth_ = s.width;
   frameHeight_ = s.height;
 }
 
-void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const gpu::PushConstants& push, bool timestamps) {
-  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, activePipeline_->handle());
+void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
+                              const gpu::PushConstants& push, bool timestamps) {
+  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, pipeline.handle());
   cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
   cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *queryPool_, 0);
@@ -286,7 +336,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       try {
         context_.submitAndWait(step, [&](const vk::raii::CommandBuffer& cmd) {
           if (timestamps_) cmd.resetQueryPool(*queryPool_, 0, 2);
-          recordDispatch(cmd, push, timestamps_);
+          recordDispatch(cmd, refine ? *refinePipeline_ : *samplePipeline_, push, timestamps_);
           // Shader writes must be visible to the host's mapped reads (or the readback copy).
           vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
                                     vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
@@ -346,15 +396,22 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   current_.applySettings(settings);
   // The BVH exists only if setScene built it; without it the kernel loops over all primitives.
   current_.useBvh = current_.useBvh && !gpuScene_.bvh.nodes.empty();
+  usesUniformScene_ = useUniformScene(options);
+  const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
+  // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   bool reused = false;
-  auto spec = specializationFor(current_, settings, options);
-  activePipeline_ = &pipelineFor(spec, reused);
-  lastPipelineMs_ = reused ? 0.0 : activePipeline_->creationMs();
+  bool center = !options.progressive && (settings.spp == 1 || adaptive);
+  samplePipeline_ = &pipelineFor(specializationFor(current_, settings, options, center), reused);
+  lastPipelineMs_ = reused ? 0.0 : samplePipeline_->creationMs();
+  refinePipeline_ = nullptr;
+  if (adaptive) {
+    refinePipeline_ = &pipelineFor(specializationFor(current_, settings, options, false), reused);
+    if (!reused) lastPipelineMs_ += refinePipeline_->creationMs();
+  }
 
   std::uint64_t rowBytes = static_cast<std::uint64_t>(settings.width) * sizeof(glm::vec4);
   std::uint64_t limit = std::min<std::uint64_t>(context_.info().maxStorageBufferRange, kImageWindowBudget);
   std::uint64_t rowsFit = limit / rowBytes;
-  const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
   // The refine pass's window holds two extra rows.
   if (adaptive && rowsFit > 2) rowsFit -= 2;
   if (rowsFit < 8 && rowsFit < settings.height) {
@@ -377,7 +434,7 @@ void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t s
   push.sampleBase = sampleBase;
   push.sampleCount = count;
   push.flags = accumulate ? gpu::kFlagAccumulate : 0u;
-  recordDispatch(cmd, push, false);
+  recordDispatch(cmd, *samplePipeline_, push, false);
 }
 
 vk::Buffer Renderer::imageBuffer() const { return image_ ? image_->handle() : vk::Buffer(); }

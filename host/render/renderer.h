@@ -45,8 +45,15 @@ struct RenderProgress {
   double remainingMs = 0.0;
 };
 
+// Where the kernel reads small scene arrays from. Auto: uniform buffers on CPU devices when the
+// scene fits their capacity (a UBO read is one vector gather on lavapipe, an SSBO read a per-lane
+// loop), storage buffers otherwise.
+enum class SceneMemory { Auto, Uniform, Storage };
+
 struct RenderOptions {
   bool specialize = true;     // false: every feature compiled in (--no-specialize)
+  SceneMemory sceneMemory = SceneMemory::Auto;
+  bool progressive = false;   // samples from the per-pixel sequence even at 1 spp (viewer frames)
   bool countStats = true;     // ray counters (a specialization; off costs nothing)
   double bandBudgetMs = 100.0; // target GPU time of one submission (watchdog-safe)
   std::function<void(const RenderProgress&)> progress;
@@ -98,16 +105,20 @@ class Renderer {
   Image readImage() const;         // averages of the sums (after the recorded work completed)
   RayStats takeStats();            // reads and zeroes the counters
   const Features& currentFeatures() const { return current_; }
+  bool usesUniformScene() const { return usesUniformScene_; }
   double lastPipelineMs() const { return lastPipelineMs_; }
 
  private:
   struct PipelineKey;
-  vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o) const;
+  vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
+                                           bool centerSample) const;
+  bool useUniformScene(const RenderOptions& o) const;
   const vulkan::ComputePipeline& pipelineFor(const vulkan::Specialization& spec, bool& reused);
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();
-  void recordDispatch(const vk::raii::CommandBuffer& cmd, const gpu::PushConstants& push, bool timestamps);
+  void recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
+                      const gpu::PushConstants& push, bool timestamps);
   RayStats readStatsAndReset();
 
   const vulkan::Context& context_;
@@ -120,13 +131,15 @@ class Renderer {
   vk::raii::DescriptorSet descriptorSet_{nullptr};
   vk::raii::QueryPool queryPool_{nullptr};
   std::map<vulkan::Specialization, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
-  const vulkan::ComputePipeline* activePipeline_ = nullptr;
+  const vulkan::ComputePipeline* samplePipeline_ = nullptr; // pass kPassSample
+  const vulkan::ComputePipeline* refinePipeline_ = nullptr; // adaptive AA's refine pass
 
   GpuScene gpuScene_;
   Features features_; // scene facts; settings applied per render into current_
   Features current_;
   std::unique_ptr<vulkan::Buffer> frameBuffer_;
-  std::vector<std::unique_ptr<vulkan::Buffer>> sceneBuffers_; // indexed by binding
+  std::vector<std::unique_ptr<vulkan::Buffer>> sceneBuffers_; // indexed by binding (SSBO and UBO copies)
+  bool sceneFitsUbo_ = false;
   std::unique_ptr<vulkan::Buffer> image_;     // window of imageRows_ rows
   std::unique_ptr<vulkan::Buffer> prevImage_; // refine pass input (or a 16-byte placeholder)
   std::unique_ptr<vulkan::Buffer> stats_;
@@ -137,6 +150,7 @@ class Renderer {
   double uploadMs_ = 0.0;
   double lastPipelineMs_ = 0.0;
   bool timestamps_ = false;
+  bool usesUniformScene_ = false;
 };
 
 } // namespace vkray

@@ -22,10 +22,54 @@ std::string fmt(double v) {
 
 } // namespace
 
+std::vector<bool> planesThatCanOcclude(const Scene& scene) {
+  std::vector<bool> result(scene.planes.size(), false);
+  for (std::size_t p = 0; p < scene.planes.size(); ++p) {
+    const Plane& plane = scene.planes[p];
+    auto side = [&](const glm::dvec3& x) { return glm::dot(plane.normal, x) + plane.offset; };
+    bool may = false;
+    for (const PointLight& light : scene.lights) {
+      if (!light.shadows) continue;
+      double sl = side(light.position);
+      if (sl == 0.0) {
+        may = true; // a light in the plane: keep it simple and conservative
+        break;
+      }
+      double dir = sl > 0.0 ? 1.0 : -1.0;
+      // Is some surface point strictly on the other side from this light?
+      auto opposite = [&](double signedDistance) { return dir * signedDistance < 0.0; };
+      for (std::size_t q = 0; q < scene.planes.size() && !may; ++q) {
+        if (q == p) continue;
+        const Plane& other = scene.planes[q];
+        if (glm::length(glm::cross(plane.normal, other.normal)) > 0.0) {
+          may = true; // non-parallel planes cross: the other one has points on both sides
+        } else if (opposite(side(-other.offset * other.normal))) {
+          may = true;
+        }
+      }
+      for (const Sphere& s : scene.spheres) {
+        if (may) break;
+        if (dir * side(s.center) - s.radius < 0.0) may = true;
+      }
+      for (const Polygon& poly : scene.polygons) {
+        for (const auto& v : poly.vertices) may = may || opposite(side(v));
+      }
+      for (const Triangle& t : scene.triangles) {
+        if (may) break;
+        for (const auto& v : t.v) may = may || opposite(side(v));
+      }
+      if (may) break;
+    }
+    result[p] = may;
+  }
+  return result;
+}
+
 Features analyzeScene(const Scene& scene, const RenderSettings& settings) {
   Features f;
   f.spheres = !scene.spheres.empty();
   f.planes = !scene.planes.empty();
+  f.planeCount = static_cast<int>(scene.planes.size());
   f.triangles = !scene.triangles.empty();
   f.polygons = !scene.polygons.empty();
   f.smoothNormals = std::any_of(scene.triangles.begin(), scene.triangles.end(),
@@ -41,6 +85,8 @@ Features analyzeScene(const Scene& scene, const RenderSettings& settings) {
       std::count_if(scene.lights.begin(), scene.lights.end(), [](const PointLight& l) { return l.shadows; }));
   f.occluderPossible = scene.objectCount() >= 2;
   f.shadows = f.shadowLights > 0 && f.occluderPossible;
+  auto occluding = planesThatCanOcclude(scene);
+  f.occluderPlanes = static_cast<int>(std::count(occluding.begin(), occluding.end(), true));
   f.boundedPrimitives = scene.boundedPrimitiveCount();
   f.applySettings(settings);
   return f;
@@ -87,7 +133,13 @@ std::vector<std::string> Features::explain() const {
                   " (code for absent kinds is compiled out)");
 
   if (shadows) {
-    lines.push_back("shadows: on (" + plural(static_cast<std::size_t>(shadowLights), "light") + ")");
+    std::string line = "shadows: on (" + plural(static_cast<std::size_t>(shadowLights), "light") + ")";
+    int skipped = planes ? planeCount - occluderPlanes : 0;
+    if (skipped > 0) {
+      line += "; " + plural(static_cast<std::size_t>(skipped), "plane") + " cannot cast a shadow and " +
+              (skipped == 1 ? "is" : "are") + " left out of shadow rays";
+    }
+    lines.push_back(line);
   } else if (lights == 0) {
     lines.push_back("shadows: off — no lights");
   } else if (shadowLights == 0) {

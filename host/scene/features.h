@@ -13,6 +13,7 @@ struct Features {
   // Primitive kinds present.
   bool spheres = false;
   bool planes = false;
+  int planeCount = 0;
   bool triangles = false;
   bool polygons = false;
   bool smoothNormals = false; // some triangle carries shading normals
@@ -24,6 +25,7 @@ struct Features {
   int shadowLights = 0;
   bool occluderPossible = false;
   bool shadows = false;
+  int occluderPlanes = 0; // planes that can stand between a surface and a light
 
   // Secondary rays: reflection covers mirrors and the reflected half of dielectrics.
   bool reflection = false;
@@ -52,5 +54,10 @@ struct Features {
 inline constexpr std::size_t kBvhAutoThreshold = 12;
 
 Features analyzeScene(const Scene& scene, const RenderSettings& settings);
+
+// For each plane: can it ever stand between a shaded point and a shadow-casting light? A plane
+// cannot when every light is strictly on one side and every other surface lies (weakly) on that
+// same side: e.g. a floor with all objects and lights above it. Exact, in double precision.
+std::vector<bool> planesThatCanOcclude(const Scene& scene);
 
 } // namespace vkray

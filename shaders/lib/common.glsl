@@ -11,6 +11,14 @@ struct Ray {
   vec3 dir; // not necessarily unit length for probe rays; trace.comp keeps it unit
 };
 
+// Lavapipe (Mesa 22.3) re-specializes a shader at dispatch time on uniform values that decide a
+// branch or a loop ("inline uniforms"): it recompiles on first use, and it crashes when the value
+// comes from push constants. vkray specializes explicitly (specialization constants), so every
+// uniform-only condition goes through this factor the pass cannot see through: the dispatch's z
+// size, which the host always sets to 1.
+uint gDynamicZero = 0u; // set from a buffer at the start of main()
+uint opaqueUniform(uint v) { return v + gDynamicZero; }
+
 // sgn(x) in {-1, +1}: GLSL's sign(0) is 0, which would turn the stable quadratic's q into 0.
 float signNonZero(float x) { return x < 0.0 ? -1.0 : 1.0; }
 

@@ -14,10 +14,10 @@
 // Intersection"): the discriminant from the distance of the centre to the ray line,
 // r^2 - |f - (f.d/a) d|^2, which keeps its precision for small spheres far away; and the root pair
 // c/q, q/a from q = b' + sgn(b') sqrt(a disc), which avoids cancellation in the smaller root.
-// Returns the nearest root in (0, tMax), or -1.
-float intersectSphereRobust(Ray ray, vec3 center, float radius, float tMax) {
+// Returns the nearest root in (0, tMax), or -1. `a` is dot(dir, dir); the kernel passes the
+// constant 1 for its unit directions, which folds the divisions by a away.
+float intersectSphereRobust(Ray ray, float a, vec3 center, float radius, float tMax) {
   vec3 f = ray.origin - center;
-  float a = dot(ray.dir, ray.dir);
   float bPrime = -dot(f, ray.dir);  // b' = -f.d (half of -b)
   vec3 l = f + (bPrime / a) * ray.dir; // f minus its projection on d: centre-to-line vector
   float r2 = radius * radius;

@@ -22,6 +22,14 @@ layout(constant_id = kSpecFresnel) const uint FRESNEL = kFresnelExact;
 layout(constant_id = kSpecShadowMode) const uint SHADOW_MODE = kShadowsAttenuated;
 layout(constant_id = kSpecChecker) const bool CHECKER = true;
 layout(constant_id = kSpecSmoothNormals) const bool SMOOTH_NORMALS = true;
+layout(constant_id = kSpecSceneInUbo) const bool SCENE_IN_UBO = false;
+layout(constant_id = kSpecCenterSample) const bool CENTER_SAMPLE = false;
+layout(constant_id = kSpecSphereCount) const uint SPHERE_COUNT = kRuntimeCount;
+layout(constant_id = kSpecPlaneCount) const uint PLANE_COUNT = kRuntimeCount;
+layout(constant_id = kSpecTriangleCount) const uint TRIANGLE_COUNT = kRuntimeCount;
+layout(constant_id = kSpecPolygonCount) const uint POLYGON_COUNT = kRuntimeCount;
+layout(constant_id = kSpecLightCount) const uint LIGHT_COUNT = kRuntimeCount;
+layout(constant_id = kSpecOccluderPlaneCount) const uint OCCLUDER_PLANE_COUNT = kRuntimeCount;
 
 const bool ROBUST = NUMERICS == kNumericsRobust;
 
@@ -38,7 +46,50 @@ layout(std430, binding = kBindingNormals) readonly buffer Normals { vec4 shading
 layout(std430, binding = kBindingBvhNodes) readonly buffer BvhNodes { BvhNode bvhNodes[]; };
 layout(std430, binding = kBindingPrimRefs) readonly buffer PrimRefs { uint primRefs[]; };
 
-#define VKRAY_POLYGON_VERTEX(i) polyVertices[i].xyz
+layout(std140, binding = kBindingSceneUbo) uniform SceneBlock { SceneUbo small; };
+
+// Loop bounds: a specialization constant where the host baked the count in (the loop unrolls).
+uint sphereCount() { return SPHERE_COUNT != kRuntimeCount ? SPHERE_COUNT : opaqueUniform(frame.counts.x); }
+uint planeCount() { return PLANE_COUNT != kRuntimeCount ? PLANE_COUNT : opaqueUniform(frame.counts.y); }
+uint triangleCount() { return TRIANGLE_COUNT != kRuntimeCount ? TRIANGLE_COUNT : opaqueUniform(frame.counts.z); }
+uint polygonCount() { return POLYGON_COUNT != kRuntimeCount ? POLYGON_COUNT : opaqueUniform(frame.counts.w); }
+uint occluderPlaneCount() {
+  return OCCLUDER_PLANE_COUNT != kRuntimeCount ? OCCLUDER_PLANE_COUNT : opaqueUniform(frame.counts2.z);
+}
+uint lightCount() { return LIGHT_COUNT != kRuntimeCount ? LIGHT_COUNT : opaqueUniform(frame.counts2.x); }
+
+// Scene array access. SCENE_IN_UBO is a specialization constant, so only one of each pair of loads
+// survives compilation.
+Material loadMaterial(uint i) {
+  if (SCENE_IN_UBO) return small.materials[i];
+  return materials[i];
+}
+Light loadLight(uint i) {
+  if (SCENE_IN_UBO) return small.lights[i];
+  return lights[i];
+}
+Sphere loadSphere(uint i) {
+  if (SCENE_IN_UBO) return small.spheres[i];
+  return spheres[i];
+}
+Plane loadPlane(uint i) {
+  if (SCENE_IN_UBO) return small.planes[i];
+  return planes[i];
+}
+Triangle loadTriangle(uint i) {
+  if (SCENE_IN_UBO) return small.triangles[i];
+  return triangles[i];
+}
+Polygon loadPolygon(uint i) {
+  if (SCENE_IN_UBO) return small.polygons[i];
+  return polygons[i];
+}
+vec3 loadPolyVertex(uint i) {
+  if (SCENE_IN_UBO) return small.polyVertices[i].xyz;
+  return polyVertices[i].xyz;
+}
+
+#define VKRAY_POLYGON_VERTEX(i) loadPolyVertex(i)
 #include "intersect.glsl"
 
 // ---- Hits ----------------------------------------------------------------------------------------
@@ -80,25 +131,25 @@ TraceRay makeTraceRay(vec3 origin, vec3 dir) {
 }
 
 float sphereT(TraceRay r, uint i, float tMax) {
-  vec4 s = spheres[i].centerRadius;
-  return ROBUST ? intersectSphereRobust(r.ray, s.xyz, s.w, tMax)
+  vec4 s = loadSphere(i).centerRadius;
+  return ROBUST ? intersectSphereRobust(r.ray, 1.0, s.xyz, s.w, tMax)
                 : intersectSphereNaive(r.ray, s.xyz, s.w, tMax);
 }
 
 float triangleT(TraceRay r, uint i, float tMax, out vec3 bary) {
-  Triangle tri = triangles[i];
+  Triangle tri = loadTriangle(i);
   return ROBUST ? intersectTriangleRobust(r.ray, r.w, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary)
                 : intersectTriangleNaive(r.ray, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary);
 }
 
 float polygonT(TraceRay r, uint i, float tMax) {
-  Polygon poly = polygons[i];
+  Polygon poly = loadPolygon(i);
   return ROBUST ? intersectPolygonRobust(r.ray, r.w, poly.plane.xyz, poly.meta.x, poly.meta.y, tMax)
                 : intersectPolygonNaive(r.ray, poly.plane.xyz, poly.meta.x, poly.meta.y, tMax);
 }
 
 float planeT(TraceRay r, uint i, float tMax) {
-  vec4 pl = planes[i].normalOffset;
+  vec4 pl = loadPlane(i).normalOffset;
   return ROBUST ? intersectPlaneRobust(r.ray, pl.xyz, pl.w, tMax)
                 : intersectPlaneNaive(r.ray, pl.xyz, pl.w, tMax);
 }
@@ -167,11 +218,13 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
   }
 }
 
-// Closest hit in (0, tMax). anyHit: stop at the first hit (shadow rays).
-Hit traceScene(TraceRay r, float tMax, bool anyHit) {
+// Closest hit in (0, tMax). anyHit: stop at the first hit. shadowRay: skip the planes the host
+// proved cannot stand between a surface and a light (host/scene/features.cpp).
+Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay) {
   Hit hit = Hit(tMax, kNoHit, 0u, vec3(0.0));
   if (HAS_PLANES) {
-    for (uint i = 0u; i < frame.counts.y; ++i) {
+    uint planes = shadowRay ? occluderPlaneCount() : planeCount();
+    for (uint i = 0u; i < planes; ++i) {
       float t = planeT(r, i, hit.t);
       if (t > 0.0) {
         hit = Hit(t, kPrimPlane, i, vec3(0.0));
@@ -180,22 +233,22 @@ Hit traceScene(TraceRay r, float tMax, bool anyHit) {
     }
   }
   if (USE_BVH) {
-    if (frame.counts2.y > 0u) traverseBvh(r, hit, anyHit);
+    if (opaqueUniform(frame.counts2.y) > 0u) traverseBvh(r, hit, anyHit);
   } else {
     if (HAS_SPHERES) {
-      for (uint i = 0u; i < frame.counts.x; ++i) {
+      for (uint i = 0u; i < sphereCount(); ++i) {
         testPrimitive(r, kPrimSphere, i, hit);
         if (anyHit && hit.kind != kNoHit) return hit;
       }
     }
     if (HAS_TRIANGLES) {
-      for (uint i = 0u; i < frame.counts.z; ++i) {
+      for (uint i = 0u; i < triangleCount(); ++i) {
         testPrimitive(r, kPrimTriangle, i, hit);
         if (anyHit && hit.kind != kNoHit) return hit;
       }
     }
     if (HAS_POLYGONS) {
-      for (uint i = 0u; i < frame.counts.w; ++i) {
+      for (uint i = 0u; i < polygonCount(); ++i) {
         testPrimitive(r, kPrimPolygon, i, hit);
         if (anyHit && hit.kind != kNoHit) return hit;
       }
@@ -209,12 +262,12 @@ Surface surfaceAt(TraceRay r, Hit hit) {
   Surface s;
   s.kind = hit.kind;
   if (hit.kind == kPrimSphere) {
-    vec4 cr = spheres[hit.index].centerRadius;
-    sphereSurface(r.ray, hit.t, cr.xyz, cr.w, s.p, s.ng, s.errorBound);
+    Sphere sph = loadSphere(hit.index);
+    sphereSurface(r.ray, hit.t, sph.centerRadius.xyz, sph.centerRadius.w, s.p, s.ng, s.errorBound);
     s.ns = s.ng;
-    s.material = spheres[hit.index].meta.x;
+    s.material = sph.meta.x;
   } else if (hit.kind == kPrimTriangle) {
-    Triangle tri = triangles[hit.index];
+    Triangle tri = loadTriangle(hit.index);
     if (ROBUST) {
       triangleSurface(hit.bary, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, s.p, s.ng, s.errorBound);
     } else {
@@ -233,17 +286,17 @@ Surface surfaceAt(TraceRay r, Hit hit) {
     }
     s.material = floatBitsToUint(tri.v0.w);
   } else if (hit.kind == kPrimPolygon) {
-    Polygon poly = polygons[hit.index];
-    polygonSurface(r.ray, hit.t, polyVertices[poly.meta.x].xyz, s.p, s.errorBound);
+    Polygon poly = loadPolygon(hit.index);
+    polygonSurface(r.ray, hit.t, loadPolyVertex(poly.meta.x), s.p, s.errorBound);
     s.ng = poly.plane.xyz;
     s.ns = s.ng;
     s.material = poly.meta.z;
   } else {
-    vec4 pl = planes[hit.index].normalOffset;
-    planeSurface(r.ray, hit.t, pl.xyz, pl.w, s.p, s.errorBound);
-    s.ng = pl.xyz;
+    Plane pl = loadPlane(hit.index);
+    planeSurface(r.ray, hit.t, pl.normalOffset.xyz, pl.normalOffset.w, s.p, s.errorBound);
+    s.ng = pl.normalOffset.xyz;
     s.ns = s.ng;
-    s.material = planes[hit.index].meta.x;
+    s.material = pl.meta.x;
   }
   return s;
 }

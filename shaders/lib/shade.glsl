@@ -50,7 +50,7 @@ uvec2 mediaRemove(uvec2 m, uint id) {
   return mediaSetSlot(m, kMaxMediaDepth - 1u, kNoMedium);
 }
 
-float mediumIor(uint id) { return id == kNoMedium ? 1.0 : materials[id].transmission.y; }
+float mediumIor(uint id) { return id == kNoMedium ? 1.0 : loadMaterial(id).transmission.y; }
 
 // Beer-Lambert attenuation over a distance; a zero coefficient never meets an infinite distance.
 vec3 beerLambert(vec3 sigma, float dist) {
@@ -59,23 +59,18 @@ vec3 beerLambert(vec3 sigma, float dist) {
 }
 
 // ---- Surface colour ------------------------------------------------------------------------------
-// Checker: planar surfaces use squares in the plane's own frame (a 3-D checker flickers on a floor at
-// y = 0, where rounding puts hit points on either side of the cell boundary); spheres the 3-D one.
+// 3-D checker (cubes of side `scale` in world space), evaluated at a point pushed just behind the
+// surface by more than the hit point's error: a floor at y = 0 would otherwise flicker between two
+// cells as rounding puts its hit points on either side of the cell boundary.
 vec3 baseColor(Material mat, Surface s) {
-  if (!CHECKER || mat.color2.a <= 0.0) return mat.color.rgb;
-  vec3 pw = (s.p + frame.worldOffset.xyz) / mat.color2.a;
-  float cells;
-  if (s.kind == kPrimSphere) {
-    cells = floor(pw.x) + floor(pw.y) + floor(pw.z);
-  } else {
-    vec3 n = s.ng;
-    vec3 a = abs(n);
-    vec3 axis = (a.x <= a.y && a.x <= a.z) ? vec3(1, 0, 0) : (a.y <= a.z ? vec3(0, 1, 0) : vec3(0, 0, 1));
-    vec3 u = normalize(cross(axis, n));
-    vec3 v = cross(n, u);
-    cells = floor(dot(pw, u)) + floor(dot(pw, v));
-  }
-  return (mod(cells, 2.0) == 0.0) ? mat.color.rgb : mat.color2.rgb;
+  if (!CHECKER) return mat.color.rgb;
+  float scale = mat.color2.a;
+  vec3 offset = frame.worldOffset.xyz;
+  float margin = 2.0 * s.errorBound + 4.0 * 1.2e-7 * (maxComponent(abs(offset)) + maxComponent(abs(s.p)));
+  vec3 q = (s.p + offset - s.ng * margin) / max(scale, 1e-30);
+  float cells = floor(q.x) + floor(q.y) + floor(q.z);
+  bool odd = cells - 2.0 * floor(0.5 * cells) != 0.0;
+  return (scale > 0.0 && odd) ? mat.color2.rgb : mat.color.rgb;
 }
 
 // Fraction of a light's colour that reaches `origin` (already offset off the surface): 0 or 1 for
@@ -88,7 +83,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   vec3 dir = toLight / dist;
   if (!REFRACTION || SHADOW_MODE == kShadowsOpaque) {
     if (COUNT_STATS) gShadowRays++;
-    Hit h = traceScene(makeTraceRay(origin, dir), dist, true);
+    Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true);
     return h.kind == kNoHit ? vec3(1.0) : vec3(0.0);
   }
   vec3 transmit = vec3(1.0);
@@ -99,10 +94,10 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     if (COUNT_STATS) gShadowRays++;
     TraceRay r = makeTraceRay(o, dir);
     float remaining = length(lightPos - o);
-    Hit h = traceScene(r, remaining, false);
+    Hit h = traceScene(r, remaining, false, true);
     if (h.kind == kNoHit) return transmit;
     Surface s = surfaceAt(r, h);
-    Material m = materials[s.material];
+    Material m = loadMaterial(s.material);
     if (m.transmission.x <= 0.0) return vec3(0.0);
     transmit *= m.transmission.x;
     float here = travelled + h.t;
@@ -132,8 +127,8 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
   if (kd <= 0.0 && ks <= 0.0) return color; // nothing to light: no shadow rays either
   vec3 v = -rayDir;
   vec3 origin = ROBUST ? spawnOrigin(s.p, ngf, s.errorBound) : s.p;
-  for (uint i = 0u; i < frame.counts2.x; ++i) {
-    Light light = lights[i];
+  for (uint i = 0u; i < lightCount(); ++i) {
+    Light light = loadLight(i);
     vec3 toLight = light.position.xyz - s.p;
     float dist = length(toLight);
     if (dist <= 0.0) continue;

@@ -40,7 +40,21 @@ VKRAY_CONST(uint, kBindingPrimRefs, 10u);    // uint[] BVH leaf references (kind
 VKRAY_CONST(uint, kBindingImage, 11u);       // vec4[] linear RGB, row-major, width * height
 VKRAY_CONST(uint, kBindingStats, 12u);       // RayStats
 VKRAY_CONST(uint, kBindingPrevImage, 13u);   // vec4[] copy of the image read by the refine pass
-VKRAY_CONST(uint, kBindingCount, 14u);
+// The same small arrays packed into one uniform buffer (kSpecSceneInUbo), see SceneUbo below.
+VKRAY_CONST(uint, kBindingSceneUbo, 14u);
+VKRAY_CONST(uint, kBindingCount, 15u);
+
+// Capacities of the uniform copy, 64 KiB in all (the smallest maxUniformBufferRange of the devices
+// vkray targets). On CPU drivers a UBO read is one vector gather, an SSBO read a per-lane scalar
+// loop, so small scenes are read from here. One block rather than one per array: Mesa 22.3's
+// lavapipe corrupts memory when it inlines values from a uniform buffer bound at slot 4 or above.
+VKRAY_CONST(uint, kUboMaterials, 128u);    // 10 KiB
+VKRAY_CONST(uint, kUboLights, 64u);        // 2 KiB
+VKRAY_CONST(uint, kUboSpheres, 512u);      // 16 KiB
+VKRAY_CONST(uint, kUboPlanes, 64u);        // 2 KiB
+VKRAY_CONST(uint, kUboTriangles, 512u);    // 24 KiB
+VKRAY_CONST(uint, kUboPolygons, 128u);     // 4 KiB
+VKRAY_CONST(uint, kUboPolyVertices, 384u); // 6 KiB
 
 // ---- Specialization constants (ids) --------------------------------------------------------------
 // Each switches code on or off at pipeline creation, so the driver compiles out absent effects.
@@ -59,7 +73,20 @@ VKRAY_CONST(uint, kSpecFresnel, 11u);        // kFresnelExact / kFresnelSchlick
 VKRAY_CONST(uint, kSpecShadowMode, 12u);     // kShadowsOpaque / kShadowsAttenuated
 VKRAY_CONST(uint, kSpecChecker, 13u);        // any material has a checker
 VKRAY_CONST(uint, kSpecSmoothNormals, 14u);  // any triangle has shading normals
-VKRAY_CONST(uint, kSpecCount, 15u);
+VKRAY_CONST(uint, kSpecSceneInUbo, 15u);     // read the small arrays from the *Ubo bindings
+VKRAY_CONST(uint, kSpecCenterSample, 16u);   // one sample through each pixel centre (no sequence)
+// Counts of the brute-force arrays and of the lights. A small count baked in lets the driver unroll
+// the loop, so every scene read has a constant address (a scalar load on lavapipe, where a
+// loop-indexed read is an 8-lane gather). kRuntimeCount: read the count from FrameParams instead.
+VKRAY_CONST(uint, kSpecSphereCount, 17u);
+VKRAY_CONST(uint, kSpecPlaneCount, 18u);
+VKRAY_CONST(uint, kSpecTriangleCount, 19u);
+VKRAY_CONST(uint, kSpecPolygonCount, 20u);
+VKRAY_CONST(uint, kSpecLightCount, 21u);
+VKRAY_CONST(uint, kSpecOccluderPlaneCount, 22u); // planes that can cast a shadow (listed first)
+VKRAY_CONST(uint, kSpecCount, 23u);
+VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
+VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
 VKRAY_CONST(uint, kNumericsRobust, 0u);
 VKRAY_CONST(uint, kNumericsNaive, 1u);
@@ -135,6 +162,16 @@ struct BvhNode {
   uint countAxis;  // bits 0..15: primitive count (0: interior); bits 16..17: split axis
 };
 
+struct SceneUbo {
+  Material materials[kUboMaterials];
+  Light lights[kUboLights];
+  Sphere spheres[kUboSpheres];
+  Plane planes[kUboPlanes];
+  Triangle triangles[kUboTriangles];
+  Polygon polygons[kUboPolygons];
+  vec4 polyVertices[kUboPolyVertices];
+};
+
 struct FrameParams {
   vec4 cameraForward; // xyz: unit view direction
   vec4 cameraRight;   // xyz: right * tan(fov_y / 2) * aspect
@@ -146,7 +183,7 @@ struct FrameParams {
   vec4 knobs;         // x: bailout weight; y: adaptive AA threshold; zw: unused
   uvec4 imageSize;    // x: width; y: height; z: unused; w: max depth (bounces after the eye ray)
   uvec4 counts;       // x: spheres; y: planes; z: triangles; w: polygons
-  uvec4 counts2;      // x: lights; y: BVH nodes; zw: unused
+  uvec4 counts2;      // x: lights; y: BVH nodes; z: planes that can cast shadows (first in Planes[]); w: unused
 };
 
 struct RayStats {
