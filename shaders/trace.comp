@@ -3,6 +3,8 @@
 // writes the sum of its samples' radiance. Effects the scene lacks are specialized away.
 #version 460
 #extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_basic : require
 
 #include "shared/gpu_types.h"
 
@@ -39,11 +41,12 @@ struct PendingRay {
   uvec2 media;    // media stack (shade.glsl)
 };
 
+// Branch-free: on CPU drivers every branch costs as much as its body.
 void countRay(uint kind, uint depth) {
   if (!COUNT_STATS) return;
-  if (kind == kRayEye) gEyeRays++;
-  else if (kind == kRayReflection) gReflectionRays++;
-  else gRefractionRays++;
+  gEyeRays += uint(kind == kRayEye);
+  gReflectionRays += uint(kind == kRayReflection);
+  gRefractionRays += uint(kind == kRayRefraction);
   gMaxDepth = max(gMaxDepth, depth);
 }
 
@@ -199,37 +202,27 @@ bool needsRefinement(uvec2 pixel) {
   return false;
 }
 
-shared uint sCounters[10];
+// One atomic per counter per subgroup: subgroupAdd sums the invocations' counters, one invocation
+// adds the total. No barrier, so CPU drivers need no coroutine to run the workgroup.
+// (A macro: GLSL cannot pass a buffer member by reference to an atomic.)
+#define ADD_COUNTER(value, member)                                                                   \
+  {                                                                                                  \
+    uint total = subgroupAdd(value);                                                                 \
+    if (subgroupElect() && total != 0u) atomicAdd(stats.member, total);                              \
+  }
 
-// One atomic per counter per workgroup: invocations add into shared memory, invocation 0 flushes.
 void flushStats() {
   if (!COUNT_STATS) return;
-  bool first = gl_LocalInvocationIndex == 0u;
-  if (first) {
-    for (int i = 0; i < 10; ++i) sCounters[i] = 0u;
-  }
-  barrier();
-  if (gEyeRays != 0u) atomicAdd(sCounters[0], gEyeRays);
-  if (gShadowRays != 0u) atomicAdd(sCounters[1], gShadowRays);
-  if (gReflectionRays != 0u) atomicAdd(sCounters[2], gReflectionRays);
-  if (gRefractionRays != 0u) atomicAdd(sCounters[3], gRefractionRays);
-  if (gBailoutSaved != 0u) atomicAdd(sCounters[4], gBailoutSaved);
-  if (gStackOverflow != 0u) atomicAdd(sCounters[5], gStackOverflow);
-  if (gMaxDepth != 0u) atomicMax(sCounters[6], gMaxDepth);
-  if (gRefinedPixels != 0u) atomicAdd(sCounters[7], gRefinedPixels);
-  if (gNonFinite != 0u) atomicAdd(sCounters[8], gNonFinite);
-  barrier();
-  if (first) {
-    if (sCounters[0] != 0u) atomicAdd(stats.eyeRays, sCounters[0]);
-    if (sCounters[1] != 0u) atomicAdd(stats.shadowRays, sCounters[1]);
-    if (sCounters[2] != 0u) atomicAdd(stats.reflectionRays, sCounters[2]);
-    if (sCounters[3] != 0u) atomicAdd(stats.refractionRays, sCounters[3]);
-    if (sCounters[4] != 0u) atomicAdd(stats.bailoutSaved, sCounters[4]);
-    if (sCounters[5] != 0u) atomicAdd(stats.stackOverflow, sCounters[5]);
-    if (sCounters[6] != 0u) atomicMax(stats.maxDepth, sCounters[6]);
-    if (sCounters[7] != 0u) atomicAdd(stats.refinedPixels, sCounters[7]);
-    if (sCounters[8] != 0u) atomicAdd(stats.nonFinite, sCounters[8]);
-  }
+  ADD_COUNTER(gEyeRays, eyeRays);
+  ADD_COUNTER(gShadowRays, shadowRays);
+  ADD_COUNTER(gReflectionRays, reflectionRays);
+  ADD_COUNTER(gRefractionRays, refractionRays);
+  ADD_COUNTER(gBailoutSaved, bailoutSaved);
+  ADD_COUNTER(gStackOverflow, stackOverflow);
+  ADD_COUNTER(gRefinedPixels, refinedPixels);
+  ADD_COUNTER(gNonFinite, nonFinite);
+  uint deepest = subgroupMax(gMaxDepth);
+  if (subgroupElect() && deepest != 0u) atomicMax(stats.maxDepth, deepest);
 }
 
 void main() {
@@ -237,7 +230,7 @@ void main() {
   uvec2 local = gl_GlobalInvocationID.xy;
   uvec2 pixel = pc.tileOrigin + local;
   // The dispatch is rounded up to whole workgroups: invocations past the tile or image do nothing,
-  // but still reach flushStats' barriers.
+  // but still take part in flushStats' subgroup sums.
   bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize.xy));
   if (inside) {
     uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence

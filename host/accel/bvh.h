@@ -45,17 +45,17 @@ struct BvhPrimitive {
 struct BvhOptions {
   int bins = 16;
   int maxLeafSize = 4;
-  int maxDepth = 32;              // = kBvhStackSize in the shader: traversal never overflows
-  float traversalCost = 1.0f;     // SAH cost of visiting a node, relative to one primitive test
+  int maxDepth = 32;          // = kBvhStackSize in the shader: traversal never overflows
+  float traversalCost = 1.0f; // SAH cost of visiting a node, relative to one primitive test
 };
 
 struct BvhStats {
   double buildMs = 0.0;
   std::size_t nodes = 0;
   std::size_t leaves = 0;
-  int depth = 0;           // longest root-to-leaf path, in nodes
+  int depth = 0; // longest root-to-leaf path, in nodes
   std::size_t maxLeafSize = 0;
-  double sahCost = 0.0;    // expected cost of a random ray, in primitive tests
+  double sahCost = 0.0; // expected cost of a random ray, in primitive tests
 };
 
 struct Bvh {
@@ -67,8 +67,14 @@ struct Bvh {
 Bvh buildBvh(std::vector<BvhPrimitive> primitives, const BvhOptions& options = {});
 
 // Bounds of a node as the shader sees them.
-inline Aabb nodeBounds(const gpu::BvhNode& n) { return Aabb{n.boundsMin, n.boundsMax}; }
-inline std::uint32_t nodeCount(const gpu::BvhNode& n) { return n.countAxis & 0xFFFFu; }
-inline std::uint32_t nodeAxis(const gpu::BvhNode& n) { return (n.countAxis >> 16) & 3u; }
+inline Aabb nodeBounds(const gpu::BvhNode& n) {
+  return Aabb{n.boundsMin, n.boundsMax};
+}
+inline std::uint32_t nodeCount(const gpu::BvhNode& n) {
+  return n.countAxis & 0xFFFFu;
+}
+inline std::uint32_t nodeAxis(const gpu::BvhNode& n) {
+  return (n.countAxis >> 16) & 3u;
+}
 
 } // namespace vkray

@@ -24,7 +24,7 @@ struct TimedRender {
   double medianMs = 0.0; // GPU trace time (timestamps), median of the timed runs
   double minMs = 0.0;
   double maxMs = 0.0;
-  RayStats stats;        // from one extra run with counters on
+  RayStats stats; // from one extra run with counters on
   Image image;
 };
 

@@ -27,10 +27,12 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(CLI::Range(0.0, 1.0));
   app.add_option("--numerics", f.numerics, "intersection numerics: robust (default) or naive")
       ->check(CLI::IsMember({"robust", "naive"}));
-  app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")->check(CLI::IsMember({"exact", "schlick"}));
+  app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")
+      ->check(CLI::IsMember({"exact", "schlick"}));
   app.add_option("--transmissive-shadows", f.transmissiveShadows, "shadows of glass: attenuated or opaque")
       ->check(CLI::IsMember({"attenuated", "opaque"}));
-  app.add_option("--bvh", f.bvh, "acceleration structure: auto, on or off")->check(CLI::IsMember({"auto", "on", "off"}));
+  app.add_option("--bvh", f.bvh, "acceleration structure: auto, on or off")
+      ->check(CLI::IsMember({"auto", "on", "off"}));
 }
 
 void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
@@ -40,11 +42,13 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
   if (f.spp) s.spp = *f.spp;
   if (f.bailout) s.bailout = *f.bailout;
   if (f.adaptiveThreshold) s.adaptiveThreshold = *f.adaptiveThreshold;
-  if (f.antialiasing) s.antialiasing = *f.antialiasing == "adaptive" ? Antialiasing::Adaptive : Antialiasing::Stratified;
+  if (f.antialiasing)
+    s.antialiasing = *f.antialiasing == "adaptive" ? Antialiasing::Adaptive : Antialiasing::Stratified;
   if (f.numerics) s.numerics = *f.numerics == "naive" ? Numerics::Naive : Numerics::Robust;
   if (f.fresnel) s.fresnel = *f.fresnel == "schlick" ? FresnelMode::Schlick : FresnelMode::Exact;
   if (f.transmissiveShadows) {
-    s.transmissiveShadows = *f.transmissiveShadows == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
+    s.transmissiveShadows =
+        *f.transmissiveShadows == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
   }
   if (f.bvh) s.bvh = *f.bvh == "on" ? BvhMode::On : *f.bvh == "off" ? BvhMode::Off : BvhMode::Auto;
 }

@@ -12,8 +12,8 @@
 namespace vkray {
 
 struct DeviceFlags {
-  std::string device;      // --device
-  bool validate = false;   // --validate
+  std::string device;        // --device
+  bool validate = false;     // --validate
   bool syncValidate = false; // --sync-validation
   bool noPipelineCache = false;
 };

@@ -16,15 +16,17 @@ int main(int argc, char** argv) {
   RenderArgs render;
   auto* renderCmd = app.add_subcommand("render", "render a scene to an image file (.png or .pfm)");
   renderCmd->add_option("scene", render.scene, "scene file (JSON)")->required();
-  renderCmd->add_option("-o,--output", render.output, "output image: .png (sRGB 8-bit) or .pfm (linear float)")->required();
+  renderCmd->add_option("-o,--output", render.output, "output image: .png (sRGB 8-bit) or .pfm (linear float)")
+      ->required();
   renderCmd->add_flag("--stats", render.stats, "print timings, ray counts and rays per second as 'name: value' lines");
   renderCmd->add_flag("--explain", render.explain, "say which effects the scene calls for and what is compiled out");
   renderCmd->add_flag("-q,--quiet", render.quiet, "no progress bar");
   renderCmd->add_flag("--no-specialize", render.noSpecialize, "compile every feature in (for comparison)");
   renderCmd->add_option("--band-ms", render.bandMs, "target GPU time per submission in ms (watchdog safety)")
       ->check(CLI::Range(1.0, 10000.0));
-  renderCmd->add_option("--scene-memory", render.sceneMemory,
-                        "where the kernel reads small scenes from: auto, uniform or storage buffers")
+  renderCmd
+      ->add_option("--scene-memory", render.sceneMemory,
+                   "where the kernel reads small scenes from: auto, uniform or storage buffers")
       ->check(CLI::IsMember({"auto", "uniform", "storage"}));
   addRenderFlags(*renderCmd, render.render);
   addDeviceFlags(*renderCmd, render.device);
@@ -34,7 +36,8 @@ int main(int argc, char** argv) {
   BenchTimeArgs benchTime;
   auto* benchTimeCmd = benchCmd->add_subcommand("time", "median GPU trace time of repeated renders");
   benchTimeCmd->add_option("scenes", benchTime.scenes, "scene files")->required();
-  benchTimeCmd->add_option("--runs", benchTime.runs, "timed runs per scene (after one warm-up)")->check(CLI::Range(1, 1000));
+  benchTimeCmd->add_option("--runs", benchTime.runs, "timed runs per scene (after one warm-up)")
+      ->check(CLI::Range(1, 1000));
   benchTimeCmd->add_flag("--no-specialize", benchTime.noSpecialize, "compile every feature in");
   benchTimeCmd->add_option("--scene-memory", benchTime.sceneMemory, "auto, uniform or storage")
       ->check(CLI::IsMember({"auto", "uniform", "storage"}));

@@ -16,9 +16,13 @@ namespace vkray {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double msSince(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
-void printStat(const char* name, double ms) { std::printf("%s: %.2f ms\n", name, ms); }
+void printStat(const char* name, double ms) {
+  std::printf("%s: %.2f ms\n", name, ms);
+}
 
 } // namespace
 
@@ -98,12 +102,14 @@ int runRender(const RenderArgs& args) {
       std::size_t bvhBytes = renderer.gpuScene().bvh.nodes.size() * sizeof(gpu::BvhNode) +
                              renderer.gpuScene().bvh.primRefs.size() * sizeof(std::uint32_t);
       std::printf("bvh bytes: %zu\n", bvhBytes);
-      if (tris > 0) std::printf("bytes per triangle: %.1f\n", static_cast<double>(bvhBytes + tris * sizeof(gpu::Triangle)) / tris);
+      if (tris > 0)
+        std::printf("bytes per triangle: %.1f\n", static_cast<double>(bvhBytes + tris * sizeof(gpu::Triangle)) / tris);
     }
     printStat("upload", renderer.uploadMs());
     printStat("pipeline", result.timings.pipelineMs);
-    std::printf("pipeline cache: %s\n",
-                !cache ? "off" : cache->loadedFromDisk() ? "loaded from disk" : "empty (first run on this device)");
+    std::printf("pipeline cache: %s\n", !cache                    ? "off"
+                                        : cache->loadedFromDisk() ? "loaded from disk"
+                                                                  : "empty (first run on this device)");
     printStat("trace", result.timings.traceMs);
     printStat("trace wall", result.timings.traceWallMs);
     std::printf("bands: %d\n", result.timings.bands);
@@ -129,7 +135,8 @@ int runRender(const RenderArgs& args) {
 
 int runInfo(const DeviceFlags& flags) {
   auto devices = vulkan::Context::listDevices();
-  if (devices.empty()) throw DeviceError("no Vulkan device found: install a driver (apt-get install mesa-vulkan-drivers)");
+  if (devices.empty())
+    throw DeviceError("no Vulkan device found: install a driver (apt-get install mesa-vulkan-drivers)");
   for (const auto& d : devices) {
     std::printf("device %u: %s\n", d.index, d.name.c_str());
     std::printf("  type: %s\n", d.type.c_str());
@@ -140,7 +147,8 @@ int runInfo(const DeviceFlags& flags) {
     std::printf("  timestamps: %s (GPU trace time)\n", d.timestamps ? "yes" : "no");
     std::printf("  maxStorageBufferRange: %llu MiB (largest scene array / image band)\n",
                 static_cast<unsigned long long>(d.maxStorageBufferRange >> 20));
-    std::printf("  maxMemoryAllocationSize: %llu MiB\n", static_cast<unsigned long long>(d.maxMemoryAllocationSize >> 20));
+    std::printf("  maxMemoryAllocationSize: %llu MiB\n",
+                static_cast<unsigned long long>(d.maxMemoryAllocationSize >> 20));
   }
   if (!flags.device.empty()) {
     vulkan::ContextOptions options;

@@ -21,9 +21,12 @@ extern "C" void onInterrupt(int) {
 
 std::string formatMs(double ms) {
   char buf[32];
-  if (ms < 1000.0) std::snprintf(buf, sizeof buf, "%.0f ms", ms);
-  else if (ms < 120000.0) std::snprintf(buf, sizeof buf, "%.1f s", ms / 1000.0);
-  else std::snprintf(buf, sizeof buf, "%.1f min", ms / 60000.0);
+  if (ms < 1000.0)
+    std::snprintf(buf, sizeof buf, "%.0f ms", ms);
+  else if (ms < 120000.0)
+    std::snprintf(buf, sizeof buf, "%.1f s", ms / 1000.0);
+  else
+    std::snprintf(buf, sizeof buf, "%.1f min", ms / 60000.0);
   return buf;
 }
 
@@ -40,7 +43,9 @@ const std::atomic<bool>& installInterruptFlag() {
 
 ProgressBar::ProgressBar(bool enabled) : enabled_(enabled && ::isatty(STDERR_FILENO)) {}
 
-ProgressBar::~ProgressBar() { finish(); }
+ProgressBar::~ProgressBar() {
+  finish();
+}
 
 void ProgressBar::update(const RenderProgress& p) {
   if (!enabled_) return;

@@ -12,13 +12,13 @@ namespace vkray {
 const std::atomic<bool>& installInterruptFlag();
 
 class ProgressBar {
- public:
+public:
   explicit ProgressBar(bool enabled);
   ~ProgressBar();
   void update(const RenderProgress& p);
   void finish();
 
- private:
+private:
   bool enabled_;
   bool drawn_ = false;
 };

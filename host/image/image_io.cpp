@@ -29,7 +29,8 @@ namespace fs = std::filesystem;
 
 ImageFormat imageFormatFor(const fs::path& path) {
   std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".png") return ImageFormat::Png;
   if (ext == ".pfm") return ImageFormat::Pfm;
   throw InputError(path.string(), "unknown image format '" + ext + "' (use .png or .pfm)");

@@ -31,7 +31,8 @@ ImageError compareImages(const Image& image, const Image& reference) {
   double n = static_cast<double>(image.pixels.size()) * 3.0;
   e.rmse = n > 0 ? std::sqrt(sum / n) : 0.0;
   e.psnr = e.rmse > 0 ? 20.0 * std::log10(1.0 / e.rmse) : std::numeric_limits<double>::infinity();
-  e.fractionOff = image.pixels.empty() ? 0.0 : static_cast<double>(e.pixelsOff) / static_cast<double>(image.pixels.size());
+  e.fractionOff =
+      image.pixels.empty() ? 0.0 : static_cast<double>(e.pixelsOff) / static_cast<double>(image.pixels.size());
   return e;
 }
 

@@ -16,7 +16,8 @@ static_assert(sizeof(Triangle) == 48 && offsetof(Triangle, v1) == 16 && offsetof
 static_assert(sizeof(Polygon) == 32 && offsetof(Polygon, meta) == 16);
 // vec3 + uint pairs: std430 puts the uint in the vec3's fourth slot.
 static_assert(sizeof(BvhNode) == 32);
-static_assert(offsetof(BvhNode, offset) == 12 && offsetof(BvhNode, boundsMax) == 16 && offsetof(BvhNode, countAxis) == 28);
+static_assert(offsetof(BvhNode, offset) == 12 && offsetof(BvhNode, boundsMax) == 16 &&
+              offsetof(BvhNode, countAxis) == 28);
 static_assert(sizeof(FrameParams) == 11 * 16);
 static_assert(offsetof(FrameParams, knobs) == 112 && offsetof(FrameParams, imageSize) == 128);
 static_assert(offsetof(FrameParams, counts) == 144 && offsetof(FrameParams, counts2) == 160);

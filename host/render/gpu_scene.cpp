@@ -10,7 +10,9 @@ namespace vkray {
 
 namespace {
 
-glm::vec3 rel(const glm::dvec3& p, const glm::dvec3& origin) { return glm::vec3(p - origin); }
+glm::vec3 rel(const glm::dvec3& p, const glm::dvec3& origin) {
+  return glm::vec3(p - origin);
+}
 
 // float(x) may round towards the inside of a box; step one ulp outwards so bounds stay conservative.
 float down(double x) {
@@ -40,7 +42,8 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
   for (const Material& m : scene.materials) {
     gpu::Material gm{};
     gm.color = glm::vec4(glm::vec3(m.color), static_cast<float>(m.ambient));
-    gm.color2 = m.checker ? glm::vec4(glm::vec3(m.checker->color2), static_cast<float>(m.checker->scale)) : glm::vec4(0.0f);
+    gm.color2 =
+        m.checker ? glm::vec4(glm::vec3(m.checker->color2), static_cast<float>(m.checker->scale)) : glm::vec4(0.0f);
     gm.phong = glm::vec4(static_cast<float>(m.diffuse), static_cast<float>(m.specular), static_cast<float>(m.shininess),
                          static_cast<float>(m.reflection));
     gm.transmission = glm::vec4(static_cast<float>(m.transmission), static_cast<float>(m.ior), 0.0f, 0.0f);
@@ -48,10 +51,12 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     g.materials.push_back(gm);
   }
   for (const PointLight& l : scene.lights) {
-    g.lights.push_back(gpu::Light{glm::vec4(rel(l.position, origin), l.shadows ? 1.0f : 0.0f), glm::vec4(glm::vec3(l.color), 0.0f)});
+    g.lights.push_back(
+        gpu::Light{glm::vec4(rel(l.position, origin), l.shadows ? 1.0f : 0.0f), glm::vec4(glm::vec3(l.color), 0.0f)});
   }
   for (const Sphere& s : scene.spheres) {
-    g.spheres.push_back(gpu::Sphere{glm::vec4(rel(s.center, origin), static_cast<float>(s.radius)), glm::uvec4(s.material, 0, 0, 0)});
+    g.spheres.push_back(
+        gpu::Sphere{glm::vec4(rel(s.center, origin), static_cast<float>(s.radius)), glm::uvec4(s.material, 0, 0, 0)});
   }
   // Planes that can cast shadows go first: shadow rays test only those (features.h).
   std::vector<bool> occluding = planesThatCanOcclude(scene);
@@ -61,7 +66,8 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
       const Plane& p = scene.planes[i];
       // n.(x_rel + origin) + D = 0  =>  n.x_rel + (D + n.origin) = 0
       double d = p.offset + glm::dot(p.normal, origin);
-      g.planes.push_back(gpu::Plane{glm::vec4(glm::vec3(p.normal), static_cast<float>(d)), glm::uvec4(p.material, 0, 0, 0)});
+      g.planes.push_back(
+          gpu::Plane{glm::vec4(glm::vec3(p.normal), static_cast<float>(d)), glm::uvec4(p.material, 0, 0, 0)});
       if (pass == 0) ++g.occluderPlanes;
     }
   }
@@ -69,8 +75,9 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     auto first = static_cast<std::uint32_t>(g.polyVertices.size());
     for (const auto& v : poly.vertices) g.polyVertices.emplace_back(rel(v, origin), 0.0f);
     double d = -glm::dot(poly.normal, poly.vertices[0] - origin);
-    g.polygons.push_back(gpu::Polygon{glm::vec4(glm::vec3(poly.normal), static_cast<float>(d)),
-                                      glm::uvec4(first, static_cast<std::uint32_t>(poly.vertices.size()), poly.material, 0)});
+    g.polygons.push_back(
+        gpu::Polygon{glm::vec4(glm::vec3(poly.normal), static_cast<float>(d)),
+                     glm::uvec4(first, static_cast<std::uint32_t>(poly.vertices.size()), poly.material, 0)});
   }
   for (const Triangle& t : scene.triangles) {
     std::uint32_t normalBase = gpu::kNoNormals;
@@ -106,7 +113,8 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     }
     for (std::size_t i = 0; i < g.polygons.size(); ++i) {
       Aabb b;
-      for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k) b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
+      for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k)
+        b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
       prims.push_back({b, gpu::kPrimPolygon << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
     }
     g.bvh = buildBvh(std::move(prims), bvhOptions);

@@ -21,8 +21,8 @@ struct GpuScene {
   std::vector<gpu::Material> materials;
   std::vector<gpu::Light> lights;
   std::vector<gpu::Sphere> spheres;
-  std::vector<gpu::Plane> planes;     // those that can cast shadows first
-  std::uint32_t occluderPlanes = 0;    // how many of them
+  std::vector<gpu::Plane> planes;   // those that can cast shadows first
+  std::uint32_t occluderPlanes = 0; // how many of them
   std::vector<gpu::Triangle> triangles;
   std::vector<gpu::Polygon> polygons;
   std::vector<glm::vec4> polyVertices;

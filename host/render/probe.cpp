@@ -20,11 +20,11 @@ Probe::Probe(const vulkan::Context& context) : context_(context) {
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(context.device(), vk::PipelineLayoutCreateInfo({}, layouts, push));
     vk::DescriptorPoolSize size(vk::DescriptorType::eStorageBuffer, 3);
-    pool_ = vk::raii::DescriptorPool(context.device(),
-                                     vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, size));
+    pool_ = vk::raii::DescriptorPool(
+        context.device(), vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, size));
   });
-  pipeline_ = std::make_unique<vulkan::ComputePipeline>(context, std::span<const std::uint32_t>(kProbeSpv), *pipelineLayout_,
-                                                        vulkan::Specialization{}, nullptr, "probe");
+  pipeline_ = std::make_unique<vulkan::ComputePipeline>(context, std::span<const std::uint32_t>(kProbeSpv),
+                                                        *pipelineLayout_, vulkan::Specialization{}, nullptr, "probe");
 }
 
 std::vector<gpu::ProbeResult> Probe::run(const std::vector<gpu::ProbeQuery>& queries,
@@ -57,7 +57,8 @@ std::vector<gpu::ProbeResult> Probe::run(const std::vector<gpu::ProbeQuery>& que
     cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*sets.front()}, {});
     cmd.pushConstants<std::uint32_t>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, count);
     cmd.dispatch((count + 63) / 64, 1, 1);
-    vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite, vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
+    vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
+                              vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
     cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
                         vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, barrier, {}, {});
   });

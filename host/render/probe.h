@@ -13,13 +13,13 @@
 namespace vkray {
 
 class Probe {
- public:
+public:
   explicit Probe(const vulkan::Context& context);
   // polygonVertices backs kProbePolygon queries (op.z/op.w index it).
   std::vector<gpu::ProbeResult> run(const std::vector<gpu::ProbeQuery>& queries,
                                     const std::vector<glm::vec4>& polygonVertices = {});
 
- private:
+private:
   const vulkan::Context& context_;
   vk::raii::DescriptorSetLayout setLayout_{nullptr};
   vk::raii::PipelineLayout pipelineLayout_{nullptr};

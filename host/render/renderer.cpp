@@ -15,15 +15,20 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point t) { return std::chrono::duration<double, std::milli>(Clock::now() - t).count(); }
+double msSince(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
 
 // Bytes of image window the renderer allows itself: bands of rows are traced into it and read back.
 constexpr vk::DeviceSize kImageWindowBudget = 64ull << 20;
 
-bool isUniformBinding(std::uint32_t b) { return b == gpu::kBindingFrame || b == gpu::kBindingSceneUbo; }
+bool isUniformBinding(std::uint32_t b) {
+  return b == gpu::kBindingFrame || b == gpu::kBindingSceneUbo;
+}
 
-template <typename T> void uploadArray(std::unique_ptr<vulkan::Buffer>& buffer, const vulkan::Context& ctx,
-                                       const std::vector<T>& data, const std::string& name) {
+template <typename T>
+void uploadArray(std::unique_ptr<vulkan::Buffer>& buffer, const vulkan::Context& ctx, const std::vector<T>& data,
+                 const std::string& name) {
   buffer = std::make_unique<vulkan::Buffer>(ctx, data.size() * sizeof(T), vk::BufferUsageFlagBits::eStorageBuffer,
                                             vulkan::MemoryUse::DeviceLocal, name);
   buffer->write(data.data(), data.size() * sizeof(T));
@@ -61,8 +66,9 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
     vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::PushConstants));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, push));
-    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount)};
+    std::array<vk::DescriptorPoolSize, 2> sizes{
+        vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
+        vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount)};
     descriptorPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
     vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*descriptorPool_, layouts));
@@ -72,11 +78,12 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
       queryPool_ = vk::raii::QueryPool(device, vk::QueryPoolCreateInfo({}, vk::QueryType::eTimestamp, 2));
     }
   });
-  frameBuffer_ = std::make_unique<vulkan::Buffer>(context, sizeof(gpu::FrameParams), vk::BufferUsageFlagBits::eUniformBuffer,
-                                                  vulkan::MemoryUse::Upload, "frame parameters");
-  stats_ = std::make_unique<vulkan::Buffer>(context, sizeof(gpu::RayStats),
-                                            vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eTransferDst,
-                                            vulkan::MemoryUse::Readback, "ray statistics");
+  frameBuffer_ =
+      std::make_unique<vulkan::Buffer>(context, sizeof(gpu::FrameParams), vk::BufferUsageFlagBits::eUniformBuffer,
+                                       vulkan::MemoryUse::Upload, "frame parameters");
+  stats_ = std::make_unique<vulkan::Buffer>(
+      context, sizeof(gpu::RayStats), vk::BufferUsageFlagBits::eStorageBuffer | vk::BufferUsageFlagBits::eTransferDst,
+      vulkan::MemoryUse::Readback, "ray statistics");
   gpu::RayStats zero{};
   stats_->write(&zero, sizeof zero);
   prevImage_ = std::make_unique<vulkan::Buffer>(context, 16, vk::BufferUsageFlagBits::eStorageBuffer,
@@ -118,9 +125,9 @@ void Renderer::setScene(const Scene& scene) {
     packUniform(packed->polygons, g.polygons);
     packUniform(packed->polyVertices, g.polyVertices);
   }
-  sceneBuffers_[gpu::kBindingSceneUbo] = std::make_unique<vulkan::Buffer>(
-      context_, sizeof(gpu::SceneUbo), vk::BufferUsageFlagBits::eUniformBuffer, vulkan::MemoryUse::DeviceLocal,
-      "small scene (uniform)");
+  sceneBuffers_[gpu::kBindingSceneUbo] =
+      std::make_unique<vulkan::Buffer>(context_, sizeof(gpu::SceneUbo), vk::BufferUsageFlagBits::eUniformBuffer,
+                                       vulkan::MemoryUse::DeviceLocal, "small scene (uniform)");
   sceneBuffers_[gpu::kBindingSceneUbo]->write(packed.get(), sizeof(gpu::SceneUbo));
   uploadMs_ = msSince(start);
   image_.reset(); // descriptors are rewritten once the image window exists
@@ -131,14 +138,16 @@ bool Renderer::useUniformScene(const RenderOptions& o) const {
   case SceneMemory::Uniform:
     if (!sceneFitsUbo_) throw InputError("--scene-memory", "the scene's arrays exceed the uniform-buffer capacities");
     return true;
-  case SceneMemory::Storage: return false;
-  case SceneMemory::Auto: break;
+  case SceneMemory::Storage:
+    return false;
+  case SceneMemory::Auto:
+    break;
   }
   return sceneFitsUbo_ && context_.info().type == "CPU";
 }
 
-vulkan::Specialization Renderer::specializationFor(const Features& f, const RenderSettings& s,
-                                                   const RenderOptions& o, bool centerSample) const {
+vulkan::Specialization Renderer::specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
+                                                   bool centerSample) const {
   vulkan::Specialization spec;
   bool all = !o.specialize;
   spec.set(gpu::kSpecHasSpheres, all || f.spheres);
@@ -161,7 +170,9 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   spec.set(gpu::kSpecCenterSample, centerSample);
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
   // pipeline keeps every count a runtime value.
-  auto count = [&](std::size_t n) { return (all || n > gpu::kMaxUnrolledCount) ? gpu::kRuntimeCount : static_cast<std::uint32_t>(n); };
+  auto count = [&](std::size_t n) {
+    return (all || n > gpu::kMaxUnrolledCount) ? gpu::kRuntimeCount : static_cast<std::uint32_t>(n);
+  };
   spec.set(gpu::kSpecSphereCount, f.useBvh ? gpu::kRuntimeCount : count(gpuScene_.spheres.size()));
   spec.set(gpu::kSpecTriangleCount, f.useBvh ? gpu::kRuntimeCount : count(gpuScene_.triangles.size()));
   spec.set(gpu::kSpecPolygonCount, f.useBvh ? gpu::kRuntimeCount : count(gpuScene_.polygons.size()));
@@ -175,9 +186,9 @@ const vulkan::ComputePipeline& Renderer::pipelineFor(const vulkan::Specializatio
   auto it = pipelines_.find(spec);
   reused = it != pipelines_.end();
   if (!reused) {
-    auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kTraceSpv),
-                                                              *pipelineLayout_, spec, cache_ ? &cache_->cache() : nullptr,
-                                                              "trace");
+    auto pipeline =
+        std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kTraceSpv), *pipelineLayout_,
+                                                  spec, cache_ ? &cache_->cache() : nullptr, "trace");
     it = pipelines_.emplace(spec, std::move(pipeline)).first;
     if (cache_) cache_->save();
   }
@@ -208,11 +219,16 @@ void Renderer::updateDescriptors() {
   std::vector<vk::WriteDescriptorSet> writes;
   for (std::uint32_t b = 0; b < gpu::kBindingCount; ++b) {
     vk::Buffer handle;
-    if (b == gpu::kBindingFrame) handle = frameBuffer_->handle();
-    else if (b == gpu::kBindingImage) handle = image_->handle();
-    else if (b == gpu::kBindingPrevImage) handle = prevImage_->handle();
-    else if (b == gpu::kBindingStats) handle = stats_->handle();
-    else handle = sceneBuffers_[b]->handle();
+    if (b == gpu::kBindingFrame)
+      handle = frameBuffer_->handle();
+    else if (b == gpu::kBindingImage)
+      handle = image_->handle();
+    else if (b == gpu::kBindingPrevImage)
+      handle = prevImage_->handle();
+    else if (b == gpu::kBindingStats)
+      handle = stats_->handle();
+    else
+      handle = sceneBuffers_[b]->handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
     auto type = isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
     writes.emplace_back(*descriptorSet_, b, 0, 1, type, nullptr, &infos[b]);
@@ -293,7 +309,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
 
   auto runPass = [&](bool refine) {
     std::uint32_t y = 0;
-    std::uint32_t rows = std::min<std::uint32_t>(height, std::max<std::uint32_t>(8, (65536 / std::max(1u, width) + 7) / 8 * 8));
+    std::uint32_t rows =
+        std::min<std::uint32_t>(height, std::max<std::uint32_t>(8, (65536 / std::max(1u, width) + 7) / 8 * 8));
     while (y < height) {
       if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
       if (rowsPerMs > 0.0) {
@@ -341,7 +358,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
           vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
                                     vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
           cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
-                              vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, barrier, {}, {});
+                              vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, barrier, {},
+                              {});
         });
       } catch (const DeviceLostError& e) {
         throw DeviceLostError(std::string(e.what()) + " in the band of rows " + std::to_string(y) + ".." +
@@ -350,8 +368,9 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       double bandWallMs = msSince(bandStart);
       double bandGpuMs = bandWallMs;
       if (timestamps_) {
-        auto [res, ticks] = queryPool_.getResults<std::uint64_t>(0, 2, 2 * sizeof(std::uint64_t), sizeof(std::uint64_t),
-                                                                 vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
+        auto [res, ticks] =
+            queryPool_.getResults<std::uint64_t>(0, 2, 2 * sizeof(std::uint64_t), sizeof(std::uint64_t),
+                                                 vk::QueryResultFlagBits::e64 | vk::QueryResultFlagBits::eWait);
         if (res == vk::Result::eSuccess && ticks[1] >= ticks[0]) {
           bandGpuMs = static_cast<double>(ticks[1] - ticks[0]) * context_.timestampPeriodNs() * 1e-6;
         }
@@ -437,7 +456,9 @@ void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t s
   recordDispatch(cmd, *samplePipeline_, push, false);
 }
 
-vk::Buffer Renderer::imageBuffer() const { return image_ ? image_->handle() : vk::Buffer(); }
+vk::Buffer Renderer::imageBuffer() const {
+  return image_ ? image_->handle() : vk::Buffer();
+}
 
 Image Renderer::readImage() const {
   Image img(frameWidth_, frameHeight_);
@@ -449,6 +470,8 @@ Image Renderer::readImage() const {
   return img;
 }
 
-RayStats Renderer::takeStats() { return readStatsAndReset(); }
+RayStats Renderer::takeStats() {
+  return readStatsAndReset();
+}
 
 } // namespace vkray

@@ -39,7 +39,7 @@ struct RayStats {
 };
 
 struct RenderProgress {
-  double fraction = 0.0;     // of all pixel work, 0..1
+  double fraction = 0.0; // of all pixel work, 0..1
   double elapsedMs = 0.0;
   double raysPerSecond = 0.0; // when statistics are counted, else 0
   double remainingMs = 0.0;
@@ -51,10 +51,10 @@ struct RenderProgress {
 enum class SceneMemory { Auto, Uniform, Storage };
 
 struct RenderOptions {
-  bool specialize = true;     // false: every feature compiled in (--no-specialize)
+  bool specialize = true; // false: every feature compiled in (--no-specialize)
   SceneMemory sceneMemory = SceneMemory::Auto;
-  bool progressive = false;   // samples from the per-pixel sequence even at 1 spp (viewer frames)
-  bool countStats = true;     // ray counters (a specialization; off costs nothing)
+  bool progressive = false;    // samples from the per-pixel sequence even at 1 spp (viewer frames)
+  bool countStats = true;      // ray counters (a specialization; off costs nothing)
   double bandBudgetMs = 100.0; // target GPU time of one submission (watchdog-safe)
   std::function<void(const RenderProgress&)> progress;
   const std::atomic<bool>* cancel = nullptr; // checked between bands
@@ -77,7 +77,7 @@ struct RenderResult {
 };
 
 class Renderer {
- public:
+public:
   // cache may be null (no on-disk pipeline cache).
   Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache);
   ~Renderer();
@@ -101,14 +101,14 @@ class Renderer {
   void prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
   void recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count,
                      bool accumulate);
-  vk::Buffer imageBuffer() const;  // vec4(sum rgb, samples) per pixel, row-major
-  Image readImage() const;         // averages of the sums (after the recorded work completed)
-  RayStats takeStats();            // reads and zeroes the counters
+  vk::Buffer imageBuffer() const; // vec4(sum rgb, samples) per pixel, row-major
+  Image readImage() const;        // averages of the sums (after the recorded work completed)
+  RayStats takeStats();           // reads and zeroes the counters
   const Features& currentFeatures() const { return current_; }
   bool usesUniformScene() const { return usesUniformScene_; }
   double lastPipelineMs() const { return lastPipelineMs_; }
 
- private:
+private:
   struct PipelineKey;
   vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
                                            bool centerSample) const;

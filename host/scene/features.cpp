@@ -115,8 +115,8 @@ void Features::applySettings(const RenderSettings& settings) {
   }
   stackSize = std::clamp(usableDepth, 1, static_cast<int>(gpu::kMaxStackSize));
   stackTruncated = refraction && usableDepth > static_cast<int>(gpu::kMaxStackSize);
-  useBvh = boundedPrimitives > 0 && (settings.bvh == BvhMode::On ||
-                                     (settings.bvh == BvhMode::Auto && boundedPrimitives >= kBvhAutoThreshold));
+  useBvh = boundedPrimitives > 0 &&
+           (settings.bvh == BvhMode::On || (settings.bvh == BvhMode::Auto && boundedPrimitives >= kBvhAutoThreshold));
 }
 
 std::vector<std::string> Features::explain() const {

@@ -30,11 +30,11 @@ struct Features {
   // Secondary rays: reflection covers mirrors and the reflected half of dielectrics.
   bool reflection = false;
   bool refraction = false;
-  int requestedDepth = 0; // max_depth asked for
-  int usableDepth = 0;    // deepest bounce whose weight can reach the bailout (<= requestedDepth)
+  int requestedDepth = 0;       // max_depth asked for
+  int usableDepth = 0;          // deepest bounce whose weight can reach the bailout (<= requestedDepth)
   double maxBranchWeight = 0.0; // largest per-bounce weight factor (reflection + transmission)
-  int stackSize = 1;      // pending branches the kernel must hold (refraction only)
-  bool stackTruncated = false; // usableDepth > kMaxStackSize: extra branches will be dropped
+  int stackSize = 1;            // pending branches the kernel must hold (refraction only)
+  bool stackTruncated = false;  // usableDepth > kMaxStackSize: extra branches will be dropped
 
   bool useBvh = false;
   std::size_t boundedPrimitives = 0;

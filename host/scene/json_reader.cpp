@@ -54,8 +54,12 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
     // nlohmann's text is "[json.exception.parse_error.101] parse error at line 1, column 2: ...".
     auto colon = what.find(": ", what.find("parse error"));
     std::string detail = colon == std::string::npos ? what : what.substr(colon + 2);
-    throw InputError(file + ":" + std::to_string(line) + ":" + std::to_string(column),
-                     "invalid JSON: " + detail);
+    throw InputError(file + ":" + std::to_string(line) + ":" + std::to_string(column), "invalid JSON: " + detail);
+  } catch (const nlohmann::json::exception& e) {
+    // e.g. "number overflow parsing '1e400'": a number no double can hold.
+    std::string what = e.what();
+    auto close = what.find("] ");
+    throw InputError(file, "invalid JSON: " + (close == std::string::npos ? what : what.substr(close + 2)));
   }
 }
 
@@ -65,15 +69,22 @@ void JsonNode::fail(const std::string& problem) const {
 
 std::string JsonNode::typeName() const {
   switch (value_->type()) {
-  case nlohmann::json::value_t::null: return "null";
-  case nlohmann::json::value_t::object: return "an object";
-  case nlohmann::json::value_t::array: return "an array";
-  case nlohmann::json::value_t::string: return "a string";
-  case nlohmann::json::value_t::boolean: return "a boolean";
+  case nlohmann::json::value_t::null:
+    return "null";
+  case nlohmann::json::value_t::object:
+    return "an object";
+  case nlohmann::json::value_t::array:
+    return "an array";
+  case nlohmann::json::value_t::string:
+    return "a string";
+  case nlohmann::json::value_t::boolean:
+    return "a boolean";
   case nlohmann::json::value_t::number_integer:
   case nlohmann::json::value_t::number_unsigned:
-  case nlohmann::json::value_t::number_float: return "a number";
-  default: return "binary data";
+  case nlohmann::json::value_t::number_float:
+    return "a number";
+  default:
+    return "binary data";
   }
 }
 
@@ -209,8 +220,7 @@ glm::dvec3 JsonNode::vec3() const {
 glm::dvec3 JsonNode::color() const {
   if (value_->is_string()) {
     std::string s = value_->get<std::string>();
-    if (s.size() == 7 && s[0] == '#' &&
-        s.find_first_not_of("0123456789abcdefABCDEF", 1) == std::string::npos) {
+    if (s.size() == 7 && s[0] == '#' && s.find_first_not_of("0123456789abcdefABCDEF", 1) == std::string::npos) {
       glm::dvec3 c;
       for (int i = 0; i < 3; ++i) c[i] = srgbToLinear(std::stoi(s.substr(1 + 2 * i, 2), nullptr, 16) / 255.0);
       return c;
@@ -219,7 +229,8 @@ glm::dvec3 JsonNode::color() const {
   }
   glm::dvec3 c = vec3();
   for (int i = 0; i < 3; ++i) {
-    if (c[i] < 0.0) (*this)[static_cast<std::size_t>(i)].fail("colour components must be >= 0, got " + formatNumber(c[i]));
+    if (c[i] < 0.0)
+      (*this)[static_cast<std::size_t>(i)].fail("colour components must be >= 0, got " + formatNumber(c[i]));
   }
   return c;
 }

@@ -14,7 +14,7 @@
 namespace vkray {
 
 class JsonNode {
- public:
+public:
   JsonNode(const nlohmann::json& value, std::string path, const std::string& file)
       : value_(&value), path_(std::move(path)), file_(&file) {}
 
@@ -55,7 +55,7 @@ class JsonNode {
   glm::dvec3 color() const; // 3 numbers >= 0, or a "#rrggbb" sRGB string
   glm::dvec3 nonZeroVec3() const;
 
- private:
+private:
   std::string childPath(std::string_view key) const;
   std::string typeName() const;
 

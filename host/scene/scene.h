@@ -31,9 +31,9 @@ enum class BvhMode { Auto, On, Off };
 struct RenderSettings {
   std::uint32_t width = 800;
   std::uint32_t height = 600;
-  int maxDepth = 5;               // reflection/refraction bounces after the eye ray
-  int spp = 1;                    // samples per pixel
-  double bailout = 1.0 / 255.0;   // branches with weight below this are not traced (0: off)
+  int maxDepth = 5;             // reflection/refraction bounces after the eye ray
+  int spp = 1;                  // samples per pixel
+  double bailout = 1.0 / 255.0; // branches with weight below this are not traced (0: off)
   Antialiasing antialiasing = Antialiasing::Stratified;
   double adaptiveThreshold = 0.1; // adaptive AA: max channel difference to a neighbour
   Numerics numerics = Numerics::Robust;
@@ -49,13 +49,13 @@ struct Checker {
 
 struct Material {
   std::string name;
-  glm::dvec3 color{0.8};      // linear RGB
+  glm::dvec3 color{0.8}; // linear RGB
   double ambient = 0.1;
   double diffuse = 0.6;
   double specular = 0.0;
-  double shininess = 40.0;    // Phong exponent
-  double reflection = 0.0;    // 0..1
-  double transmission = 0.0;  // 0..1
+  double shininess = 40.0;   // Phong exponent
+  double reflection = 0.0;   // 0..1
+  double transmission = 0.0; // 0..1
   double ior = 1.5;
   glm::dvec3 absorption{0.0}; // Beer-Lambert coefficient per unit length
   std::optional<Checker> checker;
@@ -115,9 +115,7 @@ struct Scene {
   std::vector<Triangle> triangles;
   std::vector<MeshInfo> meshes;
 
-  std::size_t boundedPrimitiveCount() const {
-    return spheres.size() + polygons.size() + triangles.size();
-  }
+  std::size_t boundedPrimitiveCount() const { return spheres.size() + polygons.size() + triangles.size(); }
   std::size_t objectCount() const { return boundedPrimitiveCount() + planes.size(); }
 };
 

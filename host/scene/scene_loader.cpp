@@ -53,14 +53,14 @@ void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sa
 }
 
 void readRender(const JsonNode& node, RenderSettings& r) {
-  node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics",
-                  "fresnel", "transmissive_shadows", "bvh"});
+  node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics", "fresnel",
+                  "transmissive_shadows", "bvh"});
   if (auto v = node.find("max_depth")) r.maxDepth = static_cast<int>(v->integer(0, kMaxDepthLimit));
   if (auto v = node.find("spp")) r.spp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("bailout")) r.bailout = v->number(0.0, 1.0);
   if (auto v = node.find("antialiasing")) {
-    r.antialiasing = v->choice({"stratified", "adaptive"}) == "adaptive" ? Antialiasing::Adaptive
-                                                                        : Antialiasing::Stratified;
+    r.antialiasing =
+        v->choice({"stratified", "adaptive"}) == "adaptive" ? Antialiasing::Adaptive : Antialiasing::Stratified;
   }
   if (auto v = node.find("adaptive_threshold")) r.adaptiveThreshold = v->number(0.0, 1.0);
   if (auto v = node.find("numerics")) {
@@ -70,9 +70,8 @@ void readRender(const JsonNode& node, RenderSettings& r) {
     r.fresnel = v->choice({"exact", "schlick"}) == "schlick" ? FresnelMode::Schlick : FresnelMode::Exact;
   }
   if (auto v = node.find("transmissive_shadows")) {
-    r.transmissiveShadows = v->choice({"attenuated", "opaque"}) == "opaque"
-                                ? TransmissiveShadows::Opaque
-                                : TransmissiveShadows::Attenuated;
+    r.transmissiveShadows =
+        v->choice({"attenuated", "opaque"}) == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
   }
   if (auto v = node.find("bvh")) {
     std::string mode = v->choice({"auto", "on", "off"});
@@ -81,8 +80,8 @@ void readRender(const JsonNode& node, RenderSettings& r) {
 }
 
 Material readMaterial(const JsonNode& node, const std::string& name) {
-  node.allowKeys({"color", "ambient", "diffuse", "specular", "shininess", "reflection", "transmission",
-                  "ior", "absorption", "checker"});
+  node.allowKeys({"color", "ambient", "diffuse", "specular", "shininess", "reflection", "transmission", "ior",
+                  "absorption", "checker"});
   Material m;
   m.name = name;
   if (auto v = node.find("color")) m.color = v->color();
@@ -98,8 +97,8 @@ Material readMaterial(const JsonNode& node, const std::string& name) {
   }
   if (auto v = node.find("absorption")) m.absorption = v->color();
   if (m.reflection + m.transmission > 1.0 + 1e-12) {
-    node.at("transmission").fail("reflection + transmission must be <= 1 (energy), got " +
-                                 formatNumber(m.reflection + m.transmission));
+    node.at("transmission")
+        .fail("reflection + transmission must be <= 1 (energy), got " + formatNumber(m.reflection + m.transmission));
   }
   if (auto c = node.find("checker")) {
     c->allowKeys({"color2", "scale"});
@@ -146,7 +145,8 @@ std::uint32_t readObjectMaterial(const JsonNode& object, LoadContext& ctx) {
     for (auto& [k, v] : ctx.materialIds) {
       if (!k.empty()) known += (known.empty() ? "" : ", ") + k;
     }
-    node->fail("unknown material '" + name + "'" + (known.empty() ? " (no materials defined)" : " (known: " + known + ")"));
+    node->fail("unknown material '" + name + "'" +
+               (known.empty() ? " (no materials defined)" : " (known: " + known + ")"));
   }
   return it->second;
 }
@@ -207,8 +207,7 @@ void readPolygon(const JsonNode& obj, LoadContext& ctx) {
   for (std::size_t i = 0; i < v.size(); ++i) {
     double d = std::abs(glm::dot(n, v[i] - centroid));
     if (d > 1e-6 * extent) {
-      verts.fail("is not planar: vertex " + std::to_string(i) + " is " + formatNumber(d) +
-                 " off the polygon's plane");
+      verts.fail("is not planar: vertex " + std::to_string(i) + " is " + formatNumber(d) + " off the polygon's plane");
     }
   }
   // Convexity: every turn the same way round the normal, and one full turn in total (a star
@@ -288,8 +287,8 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
   LoadContext ctx{scene, {}, baseDir};
   JsonNode root(doc, "", name);
   root.expectObject();
-  root.allowKeys({"description", "camera", "image", "background", "ambient", "render", "materials",
-                  "lights", "objects"});
+  root.allowKeys(
+      {"description", "base", "camera", "image", "background", "ambient", "render", "materials", "lights", "objects"});
   if (auto d = root.find("description")) d->string();
   readCamera(root.at("camera"), scene.camera);
   bool sawBackground = false;
@@ -308,10 +307,49 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
   if (auto l = root.find("lights")) readLights(*l, scene);
   if (auto o = root.find("objects")) readObjects(*o, ctx);
   if (scene.materials.size() > kMaxMaterialCount) {
-    root.at("materials").fail("too many materials: " + std::to_string(scene.materials.size()) +
-                              " (at most " + std::to_string(kMaxMaterialCount) + ")");
+    root.at("materials")
+        .fail("too many materials: " + std::to_string(scene.materials.size()) + " (at most " +
+              std::to_string(kMaxMaterialCount) + ")");
   }
   return scene;
+}
+
+} // namespace
+
+namespace {
+
+std::string readSceneFile(const std::filesystem::path& path, const std::string& shownAs) {
+  std::error_code ec;
+  auto status = std::filesystem::status(path, ec);
+  if (ec || !std::filesystem::exists(status)) throw InputError(shownAs, "no such file");
+  if (std::filesystem::is_directory(status)) throw InputError(shownAs, "is a directory, not a scene file");
+  auto size = std::filesystem::file_size(path, ec);
+  if (!ec && size > kMaxSceneFileBytes) {
+    throw InputError(shownAs, "file too large to be a scene (" + std::to_string(size) + " bytes; at most " +
+                                  std::to_string(kMaxSceneFileBytes) + ")");
+  }
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(shownAs, "cannot open for reading");
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// "base": "other.json" makes a scene a patch of another (RFC 7386 JSON merge patch): objects merge
+// key by key, anything else (arrays included) replaces. Chains are followed up to a depth of 8.
+nlohmann::json resolveBase(nlohmann::json doc, const std::string& name, const std::filesystem::path& baseDir,
+                           int depth) {
+  if (!doc.is_object() || !doc.contains("base")) return doc;
+  JsonNode node(doc["base"], "base", name);
+  std::string baseName = node.string();
+  if (depth >= 8) node.fail("too many nested base scenes (a cycle?)");
+  std::filesystem::path basePath = baseDir / baseName;
+  std::string text = readSceneFile(basePath, basePath.string());
+  nlohmann::json base = parseJsonText(text, basePath.string());
+  base = resolveBase(std::move(base), basePath.string(), basePath.parent_path(), depth + 1);
+  doc.erase("base");
+  base.merge_patch(doc);
+  return base;
 }
 
 } // namespace
@@ -321,27 +359,14 @@ Scene loadSceneFromString(const std::string& text, const std::string& name, cons
     throw InputError(name, "file too large to be a scene (" + std::to_string(text.size()) + " bytes; at most " +
                                std::to_string(kMaxSceneFileBytes) + ")");
   }
-  nlohmann::json doc = parseJsonText(text, name);
+  nlohmann::json doc = resolveBase(parseJsonText(text, name), name, baseDir, 0);
   Scene scene = buildScene(doc, name, baseDir);
   scene.path = name;
   return scene;
 }
 
 Scene loadScene(const std::filesystem::path& path) {
-  std::error_code ec;
-  auto status = std::filesystem::status(path, ec);
-  if (ec || !std::filesystem::exists(status)) throw InputError(path.string(), "no such file");
-  if (std::filesystem::is_directory(status)) throw InputError(path.string(), "is a directory, not a scene file");
-  auto size = std::filesystem::file_size(path, ec);
-  if (!ec && size > kMaxSceneFileBytes) {
-    throw InputError(path.string(), "file too large to be a scene (" + std::to_string(size) + " bytes; at most " +
-                                        std::to_string(kMaxSceneFileBytes) + ")");
-  }
-  std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError(path.string(), "cannot open for reading");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  Scene scene = loadSceneFromString(ss.str(), path.string(), path.parent_path());
+  Scene scene = loadSceneFromString(readSceneFile(path, path.string()), path.string(), path.parent_path());
   scene.path = path;
   return scene;
 }

@@ -17,7 +17,6 @@ inline constexpr std::uintmax_t kMaxSceneFileBytes = 64ull << 20;
 Scene loadScene(const std::filesystem::path& path);
 
 // `name` stands for the file in messages; relative mesh paths resolve against `baseDir`.
-Scene loadSceneFromString(const std::string& text, const std::string& name,
-                          const std::filesystem::path& baseDir = ".");
+Scene loadSceneFromString(const std::string& text, const std::string& name, const std::filesystem::path& baseDir = ".");
 
 } // namespace vkray

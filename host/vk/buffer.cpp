@@ -36,7 +36,8 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags
     throw DeviceError(name_ + " needs " + mib(size_) + " but " + info.name + " allocates at most " +
                       mib(info.maxMemoryAllocationSize) + " at once (maxMemoryAllocationSize)");
   }
-  if (use == MemoryUse::DeviceLocal) usage |= vk::BufferUsageFlagBits::eTransferDst | vk::BufferUsageFlagBits::eTransferSrc;
+  if (use == MemoryUse::DeviceLocal)
+    usage |= vk::BufferUsageFlagBits::eTransferDst | vk::BufferUsageFlagBits::eTransferSrc;
   const std::string step = "creating buffer '" + name_ + "'";
   vulkanStep(step, [&] {
     const auto& device = context.device();

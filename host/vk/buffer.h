@@ -19,11 +19,10 @@ enum class MemoryUse {
 };
 
 class Buffer {
- public:
+public:
   // size 0 is rounded up (Vulkan forbids empty buffers). A storage buffer larger than the device's
   // maxStorageBufferRange throws, naming the limit.
-  Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use,
-         std::string name);
+  Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use, std::string name);
   Buffer(Buffer&&) noexcept = default;
   Buffer& operator=(Buffer&&) noexcept = default;
   ~Buffer();
@@ -36,7 +35,7 @@ class Buffer {
   void write(const void* data, vk::DeviceSize bytes, vk::DeviceSize offset = 0);
   void read(void* out, vk::DeviceSize bytes, vk::DeviceSize offset = 0) const;
 
- private:
+private:
   const Context* context_;
   std::string name_;
   vk::DeviceSize size_ = 0;

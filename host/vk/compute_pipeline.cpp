@@ -14,9 +14,9 @@
 
 namespace vkray::vulkan {
 
-ComputePipeline::ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv, vk::PipelineLayout layout,
-                                 const Specialization& specialization, const vk::raii::PipelineCache* cache,
-                                 const std::string& name) {
+ComputePipeline::ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv,
+                                 vk::PipelineLayout layout, const Specialization& specialization,
+                                 const vk::raii::PipelineCache* cache, const std::string& name) {
   auto start = std::chrono::steady_clock::now();
   std::vector<vk::SpecializationMapEntry> entries;
   std::vector<std::uint32_t> data;
@@ -61,7 +61,9 @@ PipelineCache::PipelineCache(const Context& context, std::filesystem::path file)
   });
 }
 
-PipelineCache::~PipelineCache() { save(); }
+PipelineCache::~PipelineCache() {
+  save();
+}
 
 void PipelineCache::save() const {
   if (file_.empty() || !*cache_) return;

@@ -16,7 +16,7 @@ class Context;
 
 // Specialization constants by id; every value is 32 bits (VkBool32, int or uint).
 class Specialization {
- public:
+public:
   void set(std::uint32_t id, std::uint32_t value) { values_[id] = value; }
   void set(std::uint32_t id, bool value) { values_[id] = value ? 1u : 0u; }
   void set(std::uint32_t id, int value) { values_[id] = static_cast<std::uint32_t>(value); }
@@ -24,27 +24,26 @@ class Specialization {
   bool operator<(const Specialization& o) const { return values_ < o.values_; }
   bool operator==(const Specialization& o) const { return values_ == o.values_; }
 
- private:
+private:
   std::map<std::uint32_t, std::uint32_t> values_;
 };
 
 class ComputePipeline {
- public:
+public:
   // cache may be null.
   ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv, vk::PipelineLayout layout,
-                  const Specialization& specialization, const vk::raii::PipelineCache* cache,
-                  const std::string& name);
+                  const Specialization& specialization, const vk::raii::PipelineCache* cache, const std::string& name);
   vk::Pipeline handle() const { return *pipeline_; }
   double creationMs() const { return creationMs_; }
 
- private:
+private:
   vk::raii::Pipeline pipeline_{nullptr};
   double creationMs_ = 0.0;
 };
 
 // A VkPipelineCache loaded from and saved back to a file keyed by the device and driver.
 class PipelineCache {
- public:
+public:
   // An empty path keeps the cache in memory only.
   PipelineCache(const Context& context, std::filesystem::path file);
   ~PipelineCache();
@@ -62,7 +61,7 @@ class PipelineCache {
   // $VKRAY_CACHE_DIR, else $XDG_CACHE_HOME/vkray, else ~/.cache/vkray; file per device + driver.
   static std::filesystem::path defaultFile(const Context& context);
 
- private:
+private:
   const Context* context_;
   std::filesystem::path file_;
   std::size_t loadedBytes_ = 0;

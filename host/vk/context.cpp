@@ -19,8 +19,7 @@ constexpr const char* kInstallHint =
 
 VKAPI_ATTR VkBool32 VKAPI_CALL onValidationMessage(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                    VkDebugUtilsMessageTypeFlagsEXT /*types*/,
-                                                   const VkDebugUtilsMessengerCallbackDataEXT* data,
-                                                   void* user) {
+                                                   const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
   if (severity < VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) return VK_FALSE;
   auto* log = static_cast<ValidationLog*>(user);
   std::string text = data && data->pMessage ? data->pMessage : "(no message)";
@@ -36,21 +35,31 @@ std::string lower(std::string s) {
 
 std::string typeName(vk::PhysicalDeviceType t) {
   switch (t) {
-  case vk::PhysicalDeviceType::eDiscreteGpu: return "discrete GPU";
-  case vk::PhysicalDeviceType::eIntegratedGpu: return "integrated GPU";
-  case vk::PhysicalDeviceType::eVirtualGpu: return "virtual GPU";
-  case vk::PhysicalDeviceType::eCpu: return "CPU";
-  default: return "other";
+  case vk::PhysicalDeviceType::eDiscreteGpu:
+    return "discrete GPU";
+  case vk::PhysicalDeviceType::eIntegratedGpu:
+    return "integrated GPU";
+  case vk::PhysicalDeviceType::eVirtualGpu:
+    return "virtual GPU";
+  case vk::PhysicalDeviceType::eCpu:
+    return "CPU";
+  default:
+    return "other";
   }
 }
 
 int typeRank(vk::PhysicalDeviceType t) {
   switch (t) {
-  case vk::PhysicalDeviceType::eDiscreteGpu: return 0;
-  case vk::PhysicalDeviceType::eIntegratedGpu: return 1;
-  case vk::PhysicalDeviceType::eVirtualGpu: return 2;
-  case vk::PhysicalDeviceType::eCpu: return 3;
-  default: return 4;
+  case vk::PhysicalDeviceType::eDiscreteGpu:
+    return 0;
+  case vk::PhysicalDeviceType::eIntegratedGpu:
+    return 1;
+  case vk::PhysicalDeviceType::eVirtualGpu:
+    return 2;
+  case vk::PhysicalDeviceType::eCpu:
+    return 3;
+  default:
+    return 4;
   }
 }
 
@@ -76,16 +85,17 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   return info;
 }
 
-vk::raii::Instance createInstance(const vk::raii::Context& context, const ContextOptions& options,
-                                  ValidationLog* log, bool validation) {
+vk::raii::Instance createInstance(const vk::raii::Context& context, const ContextOptions& options, ValidationLog* log,
+                                  bool validation) {
   vk::ApplicationInfo app("vkray", 1, "vkray", 1, VK_API_VERSION_1_2);
   std::vector<const char*> layers;
   std::vector<const char*> extensions;
   for (const auto& e : options.instanceExtensions) extensions.push_back(e.c_str());
   if (validation) {
     auto available = context.enumerateInstanceLayerProperties();
-    bool found = std::any_of(available.begin(), available.end(),
-                             [](const vk::LayerProperties& p) { return std::string(p.layerName.data()) == kValidationLayer; });
+    bool found = std::any_of(available.begin(), available.end(), [](const vk::LayerProperties& p) {
+      return std::string(p.layerName.data()) == kValidationLayer;
+    });
     if (!found) {
       throw DeviceError(std::string("validation requested but ") + kValidationLayer +
                         " is not installed (apt-get install vulkan-validationlayers)");
@@ -148,8 +158,7 @@ void rethrowVulkanError(std::string_view step, const vk::SystemError& e) {
   throw DeviceError(what);
 }
 
-Context::Context(const ContextOptions& options)
-    : log_(std::make_unique<ValidationLog>(options.echoValidation)) {
+Context::Context(const ContextOptions& options) : log_(std::make_unique<ValidationLog>(options.echoValidation)) {
   validation_ = options.validation || options.synchronizationValidation;
   instance_ = createInstance(context_, options, log_.get(), validation_);
   if (validation_) {
@@ -163,7 +172,8 @@ Context::Context(const ContextOptions& options)
   }
 
   // Choose the device: by index or name when asked, else the best kind (discrete first).
-  vk::raii::PhysicalDevices devices = vulkanStep("listing devices", [&] { return vk::raii::PhysicalDevices(instance_); });
+  vk::raii::PhysicalDevices devices =
+      vulkanStep("listing devices", [&] { return vk::raii::PhysicalDevices(instance_); });
   if (devices.empty()) throw DeviceError(std::string("no Vulkan device found: ") + kInstallHint);
 
   auto familyFor = [&](const vk::raii::PhysicalDevice& pd) -> int {
@@ -198,17 +208,19 @@ Context::Context(const ContextOptions& options)
     for (std::uint32_t i = 0; i < devices.size(); ++i) {
       std::string name = devices[i].getProperties().deviceName.data();
       names += (names.empty() ? "" : ", ") + std::to_string(i) + ": " + name;
-      bool match = numeric ? std::to_string(i) == options.device
-                           : lower(name).find(lower(options.device)) != std::string::npos;
+      bool match =
+          numeric ? std::to_string(i) == options.device : lower(name).find(lower(options.device)) != std::string::npos;
       if (match && chosen < 0) chosen = static_cast<int>(i);
     }
     if (chosen < 0) throw DeviceError("--device '" + options.device + "' matches no device (have " + names + ")");
     if (familyFor(devices[static_cast<std::size_t>(chosen)]) < 0) {
-      throw DeviceError("device '" + std::string(devices[static_cast<std::size_t>(chosen)].getProperties().deviceName.data()) +
+      throw DeviceError("device '" +
+                        std::string(devices[static_cast<std::size_t>(chosen)].getProperties().deviceName.data()) +
                         "' has no suitable compute queue");
     }
     if (!hasExtensions(devices[static_cast<std::size_t>(chosen)])) {
-      throw DeviceError("device '" + std::string(devices[static_cast<std::size_t>(chosen)].getProperties().deviceName.data()) +
+      throw DeviceError("device '" +
+                        std::string(devices[static_cast<std::size_t>(chosen)].getProperties().deviceName.data()) +
                         "' lacks a required extension");
     }
   } else {
@@ -243,7 +255,8 @@ Context::Context(const ContextOptions& options)
   device_ = vulkanStep("creating the logical device", [&] { return vk::raii::Device(physicalDevice_, deviceInfo); });
   queue_ = vulkanStep("getting the queue", [&] { return device_.getQueue(queueFamily_, 0); });
   commandPool_ = vulkanStep("creating the command pool", [&] {
-    return vk::raii::CommandPool(device_, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, queueFamily_));
+    return vk::raii::CommandPool(
+        device_, vk::CommandPoolCreateInfo(vk::CommandPoolCreateFlagBits::eResetCommandBuffer, queueFamily_));
   });
 }
 
@@ -260,7 +273,8 @@ Context::~Context() {
 void Context::submitAndWait(std::string_view step,
                             const std::function<void(const vk::raii::CommandBuffer&)>& record) const {
   vulkanStep(step, [&] {
-    vk::raii::CommandBuffers buffers(device_, vk::CommandBufferAllocateInfo(*commandPool_, vk::CommandBufferLevel::ePrimary, 1));
+    vk::raii::CommandBuffers buffers(device_,
+                                     vk::CommandBufferAllocateInfo(*commandPool_, vk::CommandBufferLevel::ePrimary, 1));
     const vk::raii::CommandBuffer& cmd = buffers.front();
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     record(cmd);

@@ -16,10 +16,10 @@
 namespace vkray::vulkan {
 
 struct ContextOptions {
-  bool validation = false;                // VK_LAYER_KHRONOS_validation
-  bool synchronizationValidation = false; // its synchronization checks too (implies validation)
-  bool echoValidation = true;             // print each message on stderr as it arrives
-  std::string device;                     // index or case-insensitive name substring; empty: best
+  bool validation = false;                     // VK_LAYER_KHRONOS_validation
+  bool synchronizationValidation = false;      // its synchronization checks too (implies validation)
+  bool echoValidation = true;                  // print each message on stderr as it arrives
+  std::string device;                          // index or case-insensitive name substring; empty: best
   std::vector<std::string> instanceExtensions; // e.g. GLFW's surface extensions
   std::vector<std::string> deviceExtensions;   // e.g. VK_KHR_swapchain
   // Extra queue-family requirement (the viewer asks for present support).
@@ -42,21 +42,21 @@ struct DeviceInfo {
 
 // Messages the validation layer reported (warnings and errors).
 class ValidationLog {
- public:
+public:
   explicit ValidationLog(bool echo) : echo_(echo) {}
   void add(std::string message);
   std::size_t count() const;
   std::vector<std::string> messages() const;
   void clear();
 
- private:
+private:
   bool echo_;
   mutable std::mutex mutex_;
   std::vector<std::string> messages_;
 };
 
 class Context {
- public:
+public:
   explicit Context(const ContextOptions& options);
   Context(const Context&) = delete;
   Context& operator=(const Context&) = delete;
@@ -85,7 +85,7 @@ class Context {
   // Every physical device the loader offers, without creating a logical device.
   static std::vector<DeviceInfo> listDevices();
 
- private:
+private:
   // Declaration order is destruction order in reverse: the log outlives the instance (the layer
   // reports leaked objects while the instance is destroyed), the device outlives its pool.
   std::unique_ptr<ValidationLog> log_;

@@ -1,0 +1,168 @@
+// The command line as users script it: exit codes, one-line errors, `name: value` statistics, and no
+// output file (or an untouched old one) whenever a render fails.
+#include <sys/wait.h>
+
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <sstream>
+
+#include <gtest/gtest.h>
+
+namespace vkray::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+struct RunResult {
+  int exitCode = -1;
+  std::string out;
+  std::string err;
+};
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+// Runs build/vkray with args (a shell-quoted string), device lavapipe, validation on.
+RunResult vkray(const std::string& args) {
+  fs::path dir = fs::temp_directory_path() / ("vkray-cli-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::string cmd = std::string("VKRAY_DEVICE=llvmpipe '") + VKRAY_BINARY + "' " + args + " >" +
+                    (dir / "out").string() + " 2>" + (dir / "err").string();
+  int status = std::system(cmd.c_str());
+  RunResult r;
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(dir / "out");
+  r.err = slurp(dir / "err");
+  return r;
+}
+
+class Cli : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("vkray-cli-test-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  fs::path write(const std::string& name, const std::string& text) {
+    fs::path p = dir_ / name;
+    std::ofstream(p) << text;
+    return p;
+  }
+  std::string scene(const std::string& name) const { return std::string(VKRAY_SOURCE_DIR "/scenes/") + name; }
+  fs::path dir_;
+};
+
+TEST_F(Cli, RendersAPngWithStatistics) {
+  fs::path out = dir_ / "a.png";
+  RunResult r = vkray("render '" + scene("showcase.json") + "' -o '" + out.string() +
+                      "' --width 64 --height 48 --stats --validate --no-pipeline-cache");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(fs::exists(out));
+  EXPECT_EQ(r.err, "");
+  // Every statistic is one "name: value" line.
+  std::map<std::string, std::string> stats;
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) {
+    auto colon = line.find(": ");
+    ASSERT_NE(colon, std::string::npos) << "not a name: value line: " << line;
+    stats[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  for (const char* key : {"load", "upload", "pipeline", "trace", "readback", "write", "rays per second", "eye rays",
+                          "shadow rays", "reflection rays"}) {
+    EXPECT_TRUE(stats.count(key)) << "missing statistic " << key;
+  }
+  EXPECT_EQ(stats["eye rays"], "3072");
+  EXPECT_NE(stats["trace"].find(" ms"), std::string::npos);
+  EXPECT_GT(std::stod(stats["rays per second"]), 0.0);
+}
+
+TEST_F(Cli, WritesLinearPfm) {
+  fs::path out = dir_ / "a.pfm";
+  RunResult r = vkray("render '" + scene("showcase.json") + "' -o '" + out.string() + "' --width 16 --height 8 -q");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  std::string data = slurp(out);
+  EXPECT_EQ(data.rfind("PF\n16 8\n-1.0\n", 0), 0u);
+  EXPECT_EQ(data.size(), std::string("PF\n16 8\n-1.0\n").size() + 16 * 8 * 12);
+}
+
+TEST_F(Cli, BrokenSceneFailsWithOneLineAndWritesNothing) {
+  fs::path bad = write("bad.json", R"({ "camera": { "position": [0,0,5], "look_at": [0,0,0] },
+      "objects": [ { "type": "sphere", "center": [0,0,0], "radius": -1 } ] })");
+  fs::path out = dir_ / "out.png";
+  RunResult r = vkray("render '" + bad.string() + "' -o '" + out.string() + "'");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_EQ(r.err, "vkray: error: " + bad.string() + ": objects[0].radius: must be > 0, got -1\n");
+  EXPECT_FALSE(fs::exists(out));
+  for (const auto& e : fs::directory_iterator(dir_)) EXPECT_NE(e.path().filename(), "out.png");
+}
+
+TEST_F(Cli, FailedRenderLeavesTheOldFileIntact) {
+  fs::path out = write("keep.png", "previous contents");
+  fs::path bad = write("bad.json", "{ not json");
+  RunResult r = vkray("render '" + bad.string() + "' -o '" + out.string() + "'");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_EQ(slurp(out), "previous contents");
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir_)) ++files;
+  EXPECT_EQ(files, 2u) << "a temporary file was left behind";
+}
+
+TEST_F(Cli, UnwritableOutputFailsBeforeRendering) {
+  RunResult r = vkray("render '" + scene("showcase.json") + "' -o /nonexistent-dir/x.png");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("directory '/nonexistent-dir' does not exist"), std::string::npos) << r.err;
+  RunResult ext = vkray("render '" + scene("showcase.json") + "' -o '" + (dir_ / "x.jpg").string() + "'");
+  EXPECT_EQ(ext.exitCode, 1);
+  EXPECT_NE(ext.err.find("unknown image format '.jpg'"), std::string::npos) << ext.err;
+}
+
+TEST_F(Cli, MissingSceneFile) {
+  RunResult r = vkray("render /nonexistent/scene.json -o '" + (dir_ / "x.png").string() + "'");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_EQ(r.err, "vkray: error: /nonexistent/scene.json: no such file\n");
+}
+
+TEST_F(Cli, ExplainSaysWhatTheSceneCallsFor) {
+  RunResult r = vkray("render '" + scene("seed.json") + "' -o '" + (dir_ / "x.png").string() +
+                      "' --width 8 --height 8 --explain -q");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("shadows: on (1 light)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("reflection: on, up to depth 2"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("refraction: off — no transmissive material"), std::string::npos) << r.out;
+}
+
+TEST_F(Cli, FlagsOverrideTheScene) {
+  fs::path out = dir_ / "x.pfm";
+  RunResult r = vkray("render '" + scene("seed.json") + "' -o '" + out.string() +
+                      "' --width 12 --height 10 --max-depth 0 --stats -q");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("image: 12x10"), std::string::npos);
+  EXPECT_NE(r.out.find("reflection rays: 0"), std::string::npos);
+  RunResult bad = vkray("render '" + scene("seed.json") + "' -o '" + out.string() + "' --width 0");
+  EXPECT_NE(bad.exitCode, 0);
+  EXPECT_NE(bad.err.find("--width"), std::string::npos) << bad.err;
+}
+
+TEST_F(Cli, InfoListsLavapipe) {
+  RunResult r = vkray("info");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("llvmpipe"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("maxStorageBufferRange"), std::string::npos);
+}
+
+TEST_F(Cli, UnknownDeviceIsOneLine) {
+  RunResult r = vkray("render '" + scene("seed.json") + "' -o '" + (dir_ / "x.png").string() + "' --device nosuchgpu");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("--device 'nosuchgpu' matches no device"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+}
+
+} // namespace
+} // namespace vkray::test

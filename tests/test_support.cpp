@@ -1,0 +1,61 @@
+// Shared GPU context, renderer and helpers for the tests (see test_support.h).
+#include "test_support.h"
+
+#include <cstdlib>
+#include <memory>
+
+#include "scene/scene_loader.h"
+
+namespace vkray::test {
+
+namespace {
+
+std::size_t gSeenMessages = 0;
+
+} // namespace
+
+vulkan::Context& gpu() {
+  static std::unique_ptr<vulkan::Context> context = [] {
+    vulkan::ContextOptions options;
+    const char* device = std::getenv("VKRAY_TEST_DEVICE");
+    options.device = device && *device ? device : "llvmpipe";
+    options.validation = true;
+    const char* sync = std::getenv("VKRAY_SYNC_VALIDATION");
+    options.synchronizationValidation = sync && std::string(sync) == "1";
+    options.echoValidation = true;
+    return std::make_unique<vulkan::Context>(options);
+  }();
+  return *context;
+}
+
+Renderer& renderer() {
+  static std::unique_ptr<Renderer> r = std::make_unique<Renderer>(gpu(), nullptr);
+  return *r;
+}
+
+Scene sceneFromJson(const std::string& json, const std::string& name) {
+  return loadSceneFromString(json, name, VKRAY_SOURCE_DIR "/scenes");
+}
+
+RenderResult render(const Scene& scene, RenderOptions options) {
+  Renderer& r = renderer();
+  r.setScene(scene);
+  RenderResult result = r.render(scene.camera, scene.render, options);
+  expectNoValidationMessages();
+  EXPECT_EQ(result.stats.nonFinite, 0u) << "a sample was NaN/Inf";
+  return result;
+}
+
+void expectNoValidationMessages() {
+  auto messages = gpu().validationMessages();
+  for (std::size_t i = gSeenMessages; i < messages.size(); ++i) {
+    ADD_FAILURE() << "validation layer: " << messages[i];
+  }
+  gSeenMessages = messages.size();
+}
+
+std::string scenePath(const std::string& name) {
+  return std::string(VKRAY_SOURCE_DIR "/scenes/") + name;
+}
+
+} // namespace vkray::test

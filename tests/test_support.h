@@ -1,0 +1,34 @@
+// Shared test support: one Vulkan context on lavapipe with the validation layer on (any message
+// fails the test that caused it), a shared renderer, and small helpers to build scenes from JSON.
+#pragma once
+
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "render/renderer.h"
+#include "scene/scene.h"
+#include "vk/context.h"
+
+namespace vkray::test {
+
+// The process-wide context: device "llvmpipe" (override with VKRAY_TEST_DEVICE), validation on,
+// synchronization validation on when VKRAY_SYNC_VALIDATION=1.
+vulkan::Context& gpu();
+
+// A renderer on gpu(); pipelines are cached across tests that share a specialization.
+Renderer& renderer();
+
+// Parses a scene from JSON text (comments allowed); name appears in error messages.
+Scene sceneFromJson(const std::string& json, const std::string& name = "test.json");
+
+// Renders a scene with its own settings (tests adjust scene.render first), counting rays.
+RenderResult render(const Scene& scene, RenderOptions options = {});
+
+// Fails the current test if the validation layer reported anything since the last check.
+void expectNoValidationMessages();
+
+// Where the bundled scenes live (the source tree's scenes/).
+std::string scenePath(const std::string& name);
+
+} // namespace vkray::test
