@@ -36,7 +36,9 @@ void main() {
   float t = -1.0;
   uint op = q.op.x;
   if (op == kProbeSphere) {
-    t = robust ? intersectSphereRobust(ray, dot(ray.dir, ray.dir), q.a.xyz, q.a.w, tMax) : intersectSphereNaive(ray, q.a.xyz, q.a.w, tMax);
+    // op.z == 1: the kernel's call for its unit directions, with the constant a = 1.
+    float a = q.op.z == 1u ? 1.0 : dot(ray.dir, ray.dir);
+    t = robust ? intersectSphereRobust(ray, a, q.a.xyz, q.a.w, tMax) : intersectSphereNaive(ray, q.a.xyz, q.a.w, tMax);
     if (t > 0.0) sphereSurface(ray, t, q.a.xyz, q.a.w, p, n, err);
   } else if (op == kProbePlane) {
     t = robust ? intersectPlaneRobust(ray, q.a.xyz, q.a.w, tMax) : intersectPlaneNaive(ray, q.a.xyz, q.a.w, tMax);

@@ -129,8 +129,21 @@ vec3 shearVertex(vec3 v, Ray ray, WatertightRay w) {
   return vec3(r[w.k.x] - w.shear.x * rz, r[w.k.y] - w.shear.y * rz, w.shear.z * rz);
 }
 
+// A triangle of zero area never hits (pbrt-v4's IntersectTriangle tests this first). The sheared 2-D
+// projection cannot tell: it rounds collinear vertices off their line into a sliver with det != 0
+// (found by the degenerate-triangle test). The 3-D cross product of the float edges is exactly zero
+// for coincident vertices and for collinear ones whose differences are exact; `precise` keeps a
+// fused multiply-add from turning a zero into a rounding residue. Called only on the rare path
+// where the edge test has passed.
+bool degenerateTriangle(vec3 v0, vec3 v1, vec3 v2) {
+  precise vec3 e1 = v1 - v0;
+  precise vec3 e2 = v2 - v0;
+  precise vec3 c = e1.yzx * e2.zxy - e1.zxy * e2.yzx;
+  return all(equal(c, vec3(0.0)));
+}
+
 // Returns t in (0, tMax) or -1; bary = (b0, b1, b2) weights of v0, v1, v2. Degenerate triangles
-// (det == 0) never hit and never divide.
+// never hit and never divide.
 float intersectTriangleRobust(Ray ray, WatertightRay w, vec3 v0, vec3 v1, vec3 v2, float tMax,
                               out vec3 bary) {
   bary = vec3(0.0);
@@ -142,7 +155,7 @@ float intersectTriangleRobust(Ray ray, WatertightRay w, vec3 v0, vec3 v1, vec3 v
   float W = edgeFunction(A.xy, B.xy);
   if ((U < 0.0 || V < 0.0 || W < 0.0) && (U > 0.0 || V > 0.0 || W > 0.0)) return -1.0;
   float det = U + V + W;
-  if (det == 0.0) return -1.0;
+  if (det == 0.0 || degenerateTriangle(v0, v1, v2)) return -1.0;
   float T = U * A.z + V * B.z + W * C.z;
   // t = T / det must lie in (0, tMax): compare without dividing, sign-corrected (paper, fig. 2).
   float detSign = det < 0.0 ? -1.0 : 1.0;
@@ -174,12 +187,17 @@ float intersectTriangleNaive(Ray ray, vec3 v0, vec3 v1, vec3 v2, float tMax, out
 }
 
 // Hit point from the barycentrics (more accurate than o + t d; RTG ch. 6), and its error bound:
-// pbrt-v4 bounds the rounding of b0 v0 + b1 v1 + b2 v2 by gamma(7) sum |b_i v_i|.
+// pbrt-v4 bounds the rounding of b0 v0 + b1 v1 + b2 v2 by gamma(7) sum |b_i v_i|. A spawned ray's
+// own test then decides the side of its origin from differences v_i - o and edge products of the
+// size of the triangle, which for a triangle larger than its distance from the origin exceed that
+// bound (the re-intersection sweep found a re-hit): gamma(16) of the triangle's extent covers them
+// (first order of pbrt-v4's deltaT analysis).
 void triangleSurface(vec3 bary, vec3 v0, vec3 v1, vec3 v2, out vec3 p, out vec3 ng,
                      out float errorBound) {
   p = bary.x * v0 + bary.y * v1 + bary.z * v2;
   vec3 sumAbs = abs(bary.x * v0) + abs(bary.y * v1) + abs(bary.z * v2);
-  errorBound = gammaBound(7) * maxComponent(sumAbs);
+  vec3 extent = max(v0, max(v1, v2)) - min(v0, min(v1, v2));
+  errorBound = gammaBound(7) * maxComponent(sumAbs) + gammaBound(16) * maxComponent(extent);
   vec3 c = cross(v1 - v0, v2 - v0);
   float len = length(c);
   ng = len > 0.0 ? c / len : vec3(0.0, 0.0, 1.0);

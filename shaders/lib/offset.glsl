@@ -1,31 +1,39 @@
 // Where secondary rays start: the hit point pushed off the surface along the geometric normal, to
 // the side the new ray leaves from, by a bound on the error of the hit point. No epsilon on t.
+// tests/numerics_test.cpp checks that spawned rays never re-hit their surface and never step over
+// a neighbouring one.
 #ifndef VKRAY_OFFSET_GLSL
 #define VKRAY_OFFSET_GLSL
 
-// Ray Tracing Gems ch. 6 (Wachter & Binder, "A Fast and Robust Method for Avoiding
-// Self-Intersection"): move p by a fixed number of ulps along n, as integers, so the offset scales
-// with |p|; near the origin, where ulps become tiny, fall back to a small absolute offset.
-vec3 offsetRayOriginUlps(vec3 p, vec3 n) {
-  const float kOrigin = 1.0 / 32.0;
-  const float kFloatScale = 1.0 / 65536.0;
-  const float kIntScale = 256.0;
-  ivec3 ofi = ivec3(kIntScale * n);
-  vec3 pi = vec3(intBitsToFloat(floatBitsToInt(p.x) + (p.x < 0.0 ? -ofi.x : ofi.x)),
-                 intBitsToFloat(floatBitsToInt(p.y) + (p.y < 0.0 ? -ofi.y : ofi.y)),
-                 intBitsToFloat(floatBitsToInt(p.z) + (p.z < 0.0 ? -ofi.z : ofi.z)));
-  return vec3(abs(p.x) < kOrigin ? p.x + kFloatScale * n.x : pi.x,
-              abs(p.y) < kOrigin ? p.y + kFloatScale * n.y : pi.y,
-              abs(p.z) < kOrigin ? p.z + kFloatScale * n.z : pi.z);
+// Pharr, Jakob & Humphreys, pbrt-v4 (4th ed., section 6.8.6, OffsetRayOrigin): move p along the side
+// normal by errorBound, then step each component one float further from the surface, so that
+// rounding p + side * errorBound cannot bring the origin back. The step is the integer arithmetic on
+// the float bits of Ray Tracing Gems ch. 6 (Wachter & Binder, "A Fast and Robust Method for
+// Avoiding Self-Intersection"), but one ulp instead of its 256: there the ulps must also cover the
+// error of the hit point, which here is errorBound, bounded per shape. 256 ulps of |p| is 3e-5 |p|:
+// the parallel-mirror and thin-slab tests found mirrors 0.01 apart at 1e3 from the camera, and
+// panes that thin, stepped over (docs/numerics.md).
+const int kSpawnUlps = 1;
+
+// x moved `ulps` representable floats in the direction of dir's sign; never past zero into the
+// other sign by more than zero, never to Inf.
+float stepUlps(float x, float dir, int ulps) {
+  if (dir == 0.0) return x;
+  bool up = dir > 0.0;
+  bool away = x == 0.0 || ((x > 0.0) == up); // moving away from zero grows the magnitude bits
+  int bits = floatBitsToInt(abs(x));
+  bits = away ? min(bits + ulps, 0x7F7FFFFF) : max(bits - ulps, 0);
+  float m = intBitsToFloat(bits);
+  return (x > 0.0 || (x == 0.0 && up)) ? m : -m;
 }
 
-// The ulp offset covers the rounding of p itself. A hit point computed from much larger quantities
-// (a radius-1e4 ground sphere hit near the origin) can be off by far more than ulps of p, so each
-// intersector also reports errorBound, an absolute bound on the distance of p from the true surface
-// along n (the per-shape error analysis of pbrt-v4, "Pharr, Jakob & Humphreys, 4th ed., 6.8").
-// `side` is the geometric normal flipped to the side the new ray leaves from.
+// errorBound bounds the distance of p from the true surface along n, and the rounding the next
+// intersection test makes in deciding which side an origin that close lies on (the per-shape
+// analysis of pbrt-v4, 6.8). `side` is the geometric normal flipped to the side the new ray leaves
+// from.
 vec3 spawnOrigin(vec3 p, vec3 side, float errorBound) {
-  return offsetRayOriginUlps(p + side * errorBound, side);
+  vec3 q = p + side * errorBound;
+  return vec3(stepUlps(q.x, side.x, kSpawnUlps), stepUlps(q.y, side.y, kSpawnUlps), stepUlps(q.z, side.z, kSpawnUlps));
 }
 
 // gamma(n) = n u / (1 - n u) with u = 2^-24 (pbrt's bound on n rounded float operations).
