@@ -166,3 +166,49 @@ TEST_F(Cli, UnknownDeviceIsOneLine) {
 
 } // namespace
 } // namespace vkray::test
+
+namespace vkray::test {
+namespace {
+
+// The accuracy harness end to end in quick mode: a CSV row per point with no NaN, then the plots and
+// the report from tools/plot_accuracy.py.
+TEST_F(Cli, AccuracyBenchQuickWritesACsvAndPlots) {
+  fs::path out = dir_ / "acc";
+  RunResult r = vkray("bench accuracy --quick --out '" + out.string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  std::istringstream csv(slurp(out / "accuracy.csv"));
+  std::string header;
+  std::getline(csv, header);
+  std::size_t columns = static_cast<std::size_t>(std::count(header.begin(), header.end(), ',')) + 1;
+  EXPECT_NE(header.find("trace_ms"), std::string::npos);
+  EXPECT_NE(header.find("rmse"), std::string::npos);
+  int rows = 0;
+  std::map<std::string, int> knobs;
+  for (std::string line; std::getline(csv, line);) {
+    ++rows;
+    // Quoted values hold no commas in quick mode; count fields outside quotes anyway.
+    std::size_t fields = 1;
+    bool quoted = false;
+    for (char c : line) {
+      if (c == '"') quoted = !quoted;
+      else if (c == ',' && !quoted) ++fields;
+    }
+    EXPECT_EQ(fields, columns) << line;
+    EXPECT_EQ(line.find("nan"), std::string::npos) << line;
+    knobs[line.substr(line.find(',') + 1, line.find(',', line.find(',') + 1) - line.find(',') - 1)]++;
+  }
+  EXPECT_EQ(rows, 6); // reference + baseline + depth, bailout, spp, numerics
+  for (const char* k : {"reference", "baseline", "depth", "bailout", "spp", "numerics"}) EXPECT_EQ(knobs[k], 1) << k;
+
+  std::string cmd = std::string("/usr/bin/python3 '") + VKRAY_SOURCE_DIR + "/tools/plot_accuracy.py' '" + out.string() +
+                    "' '" + (out / "report.md").string() + "' '" + (out / "img").string() + "' >/dev/null 2>&1";
+  ASSERT_EQ(std::system(cmd.c_str()), 0) << cmd;
+  EXPECT_TRUE(fs::exists(out / "img" / "accuracy.png"));
+  EXPECT_TRUE(fs::exists(out / "img" / "accuracy-showcase.png"));
+  std::string report = slurp(out / "report.md");
+  EXPECT_NE(report.find("| numerics | naive |"), std::string::npos);
+  EXPECT_NE(report.find("Pareto front"), std::string::npos);
+}
+
+} // namespace
+} // namespace vkray::test

@@ -278,3 +278,32 @@ TEST(RenderNonSquare, OddSizesCoverEveryPixel) {
 
 } // namespace
 } // namespace vkray::test
+
+namespace vkray::test {
+namespace {
+
+// No NaN or Inf ever reaches the image: the cases the renderer must survive by construction.
+TEST(RenderNoNaN, DegenerateInputsGiveFiniteImages) {
+  // An up vector parallel to the view, shininess 0 (pow(0, 0) is undefined in GLSL), and smooth
+  // normals that cancel in the middle of a triangle (a zero-length interpolated normal).
+  Scene s = sceneFromJson(R"({
+    "camera": { "position": [0, 5, 0], "look_at": [0, 0, 0], "up": [0, 1, 0], "fov_y": 60 },
+    "image": { "width": 32, "height": 32 }, "ambient": [0.2, 0.2, 0.2], "background": [0.1, 0.1, 0.1],
+    "render": { "max_depth": 4 },
+    "materials": { "dull": { "color": [0.8, 0.8, 0.8], "specular": 1, "shininess": 0, "reflection": 0.3 } },
+    "lights": [ { "position": [1, 4, 1] } ],
+    "objects": [ { "type": "plane", "normal": [0, 1, 0], "offset": 0, "material": "dull" },
+                 { "type": "sphere", "center": [0.5, 0.5, 0], "radius": 0.5, "material": "dull" },
+                 { "type": "triangle", "vertices": [[-2, 0.1, -1], [0, 0.1, 1], [-1, 0.1, -2]],
+                   "normals": [[0, 1, 0], [0, -1, 0], [0, 1, 0]], "material": "dull" } ] })");
+  RenderResult r = render(s);
+  EXPECT_EQ(r.stats.nonFinite, 0u);
+  for (const auto& p : r.image.pixels) EXPECT_TRUE(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z));
+  // The degenerate camera still looks down: the floor fills the view.
+  std::size_t floor = 0;
+  for (const auto& p : r.image.pixels) floor += p != glm::vec3(0.1f);
+  EXPECT_GT(floor, 900u);
+}
+
+} // namespace
+} // namespace vkray::test

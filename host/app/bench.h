@@ -36,4 +36,28 @@ TimedRender timeRender(Renderer& renderer, const Scene& scene, const RenderSetti
 
 int runBenchTime(const BenchTimeArgs& args);
 
+struct BenchSpecializeArgs {
+  std::vector<std::filesystem::path> scenes; // default: every scene in scenes/
+  DeviceFlags device;
+  int runs = 7;
+  std::uint32_t height = 300; // images are scaled to this height (aspect kept)
+};
+
+// Specialized vs all-features trace time per scene, and the cost of an absent effect: a scene
+// without mirrors at max_depth 10 against max_depth 0.
+int runBenchSpecialize(const BenchSpecializeArgs& args);
+
+struct BenchAccuracyArgs {
+  std::vector<std::filesystem::path> scenes; // default: showcase, glass, seed
+  std::filesystem::path out = "accuracy";
+  DeviceFlags device;
+  int runs = 5;
+  std::uint32_t height = 240;
+  int referenceSpp = 256;
+  bool quick = false; // tiny images, few points: seconds (the test suite runs it)
+};
+
+// Error against time for every accuracy knob (docs/accuracy.md).
+int runBenchAccuracy(const BenchAccuracyArgs& args);
+
 } // namespace vkray

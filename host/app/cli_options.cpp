@@ -31,6 +31,8 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(CLI::IsMember({"exact", "schlick"}));
   app.add_option("--transmissive-shadows", f.transmissiveShadows, "shadows of glass: attenuated or opaque")
       ->check(CLI::IsMember({"attenuated", "opaque"}));
+  app.add_option("--precision", f.precision, "intersection arithmetic: float32, or float64 (reference; needs shaderFloat64)")
+      ->check(CLI::IsMember({"float32", "float64"}));
   app.add_option("--bvh", f.bvh, "acceleration structure: auto, on or off")
       ->check(CLI::IsMember({"auto", "on", "off"}));
 }
@@ -50,6 +52,7 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
     s.transmissiveShadows =
         *f.transmissiveShadows == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
   }
+  if (f.precision) s.precision = *f.precision == "float64" ? Precision::Float64 : Precision::Float32;
   if (f.bvh) s.bvh = *f.bvh == "on" ? BvhMode::On : *f.bvh == "off" ? BvhMode::Off : BvhMode::Auto;
 }
 

@@ -22,7 +22,7 @@ struct RenderFlags {
   std::optional<std::uint32_t> width, height;
   std::optional<int> maxDepth, spp;
   std::optional<double> bailout, adaptiveThreshold;
-  std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh;
+  std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision;
 };
 
 void addDeviceFlags(CLI::App& app, DeviceFlags& flags);

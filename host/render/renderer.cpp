@@ -6,7 +6,8 @@
 #include <cmath>
 #include <cstring>
 
-#include "trace_spv.h" // kTraceSpv: shaders/trace.comp compiled at build time
+#include "trace64_spv.h" // kTrace64Spv: the same, intersecting in double (-DVKRAY_FLOAT64)
+#include "trace_spv.h"   // kTraceSpv: shaders/trace.comp compiled at build time
 #include "util/error.h"
 
 namespace vkray {
@@ -162,8 +163,9 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   spec.set(gpu::kSpecCountStats, o.countStats);
   spec.set(gpu::kSpecNumerics, s.numerics == Numerics::Naive ? gpu::kNumericsNaive : gpu::kNumericsRobust);
   spec.set(gpu::kSpecFresnel, s.fresnel == FresnelMode::Schlick ? gpu::kFresnelSchlick : gpu::kFresnelExact);
-  spec.set(gpu::kSpecShadowMode,
-           s.transmissiveShadows == TransmissiveShadows::Opaque ? gpu::kShadowsOpaque : gpu::kShadowsAttenuated);
+  // Attenuated shadows only matter when something transmits; otherwise the any-hit test is exact.
+  bool attenuate = s.transmissiveShadows == TransmissiveShadows::Attenuated && (all || f.anyTransmissiveMaterial);
+  spec.set(gpu::kSpecShadowMode, attenuate ? gpu::kShadowsAttenuated : gpu::kShadowsOpaque);
   spec.set(gpu::kSpecChecker, all || f.checker);
   spec.set(gpu::kSpecSmoothNormals, all || f.smoothNormals);
   spec.set(gpu::kSpecSceneInUbo, usesUniformScene_);
@@ -182,14 +184,22 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   return spec;
 }
 
-const vulkan::ComputePipeline& Renderer::pipelineFor(const vulkan::Specialization& spec, bool& reused) {
-  auto it = pipelines_.find(spec);
+const vulkan::ComputePipeline& Renderer::pipelineFor(Precision precision, const vulkan::Specialization& spec,
+                                                     bool& reused) {
+  auto key = std::make_pair(precision, spec);
+  auto it = pipelines_.find(key);
   reused = it != pipelines_.end();
   if (!reused) {
-    auto pipeline =
-        std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kTraceSpv), *pipelineLayout_,
-                                                  spec, cache_ ? &cache_->cache() : nullptr, "trace");
-    it = pipelines_.emplace(spec, std::move(pipeline)).first;
+    bool f64 = precision == Precision::Float64;
+    if (f64 && !context_.float64Enabled()) {
+      throw InputError("render.precision", "float64 needs shaderFloat64, which " + context_.info().name + " lacks");
+    }
+    std::span<const std::uint32_t> code =
+        f64 ? std::span<const std::uint32_t>(kTrace64Spv) : std::span<const std::uint32_t>(kTraceSpv);
+    auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, code, *pipelineLayout_, spec,
+                                                              cache_ ? &cache_->cache() : nullptr,
+                                                              f64 ? "trace (float64)" : "trace");
+    it = pipelines_.emplace(key, std::move(pipeline)).first;
     if (cache_) cache_->save();
   }
   return *it->second;
@@ -420,11 +430,11 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   bool reused = false;
   bool center = !options.progressive && (settings.spp == 1 || adaptive);
-  samplePipeline_ = &pipelineFor(specializationFor(current_, settings, options, center), reused);
+  samplePipeline_ = &pipelineFor(settings.precision, specializationFor(current_, settings, options, center), reused);
   lastPipelineMs_ = reused ? 0.0 : samplePipeline_->creationMs();
   refinePipeline_ = nullptr;
   if (adaptive) {
-    refinePipeline_ = &pipelineFor(specializationFor(current_, settings, options, false), reused);
+    refinePipeline_ = &pipelineFor(settings.precision, specializationFor(current_, settings, options, false), reused);
     if (!reused) lastPipelineMs_ += refinePipeline_->creationMs();
   }
 

@@ -113,7 +113,7 @@ private:
   vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
                                            bool centerSample) const;
   bool useUniformScene(const RenderOptions& o) const;
-  const vulkan::ComputePipeline& pipelineFor(const vulkan::Specialization& spec, bool& reused);
+  const vulkan::ComputePipeline& pipelineFor(Precision precision, const vulkan::Specialization& spec, bool& reused);
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();
@@ -130,7 +130,7 @@ private:
   vk::raii::DescriptorPool descriptorPool_{nullptr};
   vk::raii::DescriptorSet descriptorSet_{nullptr};
   vk::raii::QueryPool queryPool_{nullptr};
-  std::map<vulkan::Specialization, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
+  std::map<std::pair<Precision, vulkan::Specialization>, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
   const vulkan::ComputePipeline* samplePipeline_ = nullptr; // pass kPassSample
   const vulkan::ComputePipeline* refinePipeline_ = nullptr; // adaptive AA's refine pass
 

@@ -26,6 +26,7 @@ enum class FresnelMode { Exact, Schlick };
 enum class TransmissiveShadows { Attenuated, Opaque };
 enum class Antialiasing { Stratified, Adaptive };
 enum class BvhMode { Auto, On, Off };
+enum class Precision { Float32, Float64 }; // arithmetic of ray/surface intersection
 
 // Accuracy knobs; every one can also be set on the command line.
 struct RenderSettings {
@@ -40,6 +41,7 @@ struct RenderSettings {
   FresnelMode fresnel = FresnelMode::Exact;
   TransmissiveShadows transmissiveShadows = TransmissiveShadows::Attenuated;
   BvhMode bvh = BvhMode::Auto;
+  Precision precision = Precision::Float32; // float64: the accuracy reference (needs shaderFloat64)
 };
 
 struct Checker {

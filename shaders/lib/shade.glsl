@@ -81,7 +81,9 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   float dist = length(toLight);
   if (dist <= 0.0) return vec3(1.0);
   vec3 dir = toLight / dist;
-  if (!REFRACTION || SHADOW_MODE == kShadowsOpaque) {
+  // SHADOW_MODE is attenuated only when some material transmits (host/render/renderer.cpp), and
+  // independently of max_depth: glass casts a light shadow even when no refracted ray is traced.
+  if (SHADOW_MODE == kShadowsOpaque) {
     if (COUNT_STATS) gShadowRays++;
     Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true);
     return h.kind == kNoHit ? vec3(1.0) : vec3(0.0);

@@ -221,7 +221,7 @@ VKRAY_CONST(uint, kProbeBindingQueries, 0u);
 VKRAY_CONST(uint, kProbeBindingResults, 1u);
 VKRAY_CONST(uint, kProbeBindingVertices, 2u);
 
-VKRAY_CONST(uint, kProbeSphere, 0u);   // a: centre, radius
+VKRAY_CONST(uint, kProbeSphere, 0u);   // a: centre, radius; op.z: 1 = a = 1 as the kernel (unit dir)
 VKRAY_CONST(uint, kProbePlane, 1u);    // a: normal, D
 VKRAY_CONST(uint, kProbeTriangle, 2u); // a, b, c: vertices
 VKRAY_CONST(uint, kProbePolygon, 3u);  // a: normal; op.z/op.w: first vertex, count in Vertices[]
@@ -249,5 +249,5 @@ struct ProbeResult {
 #ifdef __cplusplus
 } // namespace vkray::gpu
 #endif
-#undef VKRAY_CONST
+// VKRAY_CONST stays defined for the other shared headers (resolve_types.h).
 #endif

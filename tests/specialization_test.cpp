@@ -1,0 +1,216 @@
+// "Simulate only the effects a scene calls for": scene analysis, exact ray counts, the bailout and
+// its error bound, and proof that specialization never changes a pixel.
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+
+#include <gtest/gtest.h>
+
+#include "scene/features.h"
+#include "scene/scene_loader.h"
+#include "test_support.h"
+
+namespace vkray::test {
+namespace {
+
+// Two parallel mirrors (planes y = 0 and y = 2) seen from between them: every eye ray bounces
+// forever, so the number of rays at each level is exactly the number of pixels.
+std::string parallelMirrors(double reflection, int depth, double bailout) {
+  return R"({ "camera": { "position": [0, 1, 0], "look_at": [1, 0.3, 0.2], "fov_y": 30 },
+    "image": { "width": 24, "height": 16 }, "ambient": [0.5, 0.5, 0.5],
+    "render": { "max_depth": )" +
+         std::to_string(depth) + R"(, "bailout": )" + std::to_string(bailout) + R"( },
+    "materials": { "m": { "color": [1, 1, 1], "ambient": 0.2, "diffuse": 0.5, "reflection": )" +
+         std::to_string(reflection) + R"( } },
+    "lights": [ { "position": [0, 1, 0] } ],
+    "objects": [ { "type": "plane", "normal": [0, 1, 0], "offset": 0, "material": "m" },
+                 { "type": "plane", "normal": [0, -1, 0], "offset": 2, "material": "m" } ] })";
+}
+
+TEST(FeaturesAnalysis, SceneWithoutMirrorsNeedsDepthZero) {
+  Scene s = sceneFromJson(R"({ "camera": { "position": [0,0,5], "look_at": [0,0,0] }, "render": { "max_depth": 10 },
+    "objects": [ { "type": "sphere", "center": [0,0,0], "radius": 1 } ] })");
+  Features f = analyzeScene(s, s.render);
+  EXPECT_EQ(f.usableDepth, 0);
+  EXPECT_FALSE(f.reflection);
+  EXPECT_FALSE(f.refraction);
+  EXPECT_FALSE(f.shadows);
+  auto lines = f.explain();
+  EXPECT_NE(std::find(lines.begin(), lines.end(), "reflection: off — no reflective or transmissive material"),
+            lines.end());
+}
+
+TEST(FeaturesAnalysis, BailoutLimitsTheUsableDepth) {
+  // Weight 0.5 per bounce, bailout 1/255: 0.5^7 = 1/128 is traced, 0.5^8 = 1/256 is not.
+  Scene s = sceneFromJson(parallelMirrors(0.5, 20, 1.0 / 255.0));
+  Features f = analyzeScene(s, s.render);
+  EXPECT_TRUE(f.reflection);
+  EXPECT_EQ(f.usableDepth, 7);
+  s.render.bailout = 0.0;
+  f.applySettings(s.render);
+  EXPECT_EQ(f.usableDepth, 20);
+}
+
+TEST(FeaturesAnalysis, ShadowsNeedAnOccluder) {
+  Scene one = sceneFromJson(R"({ "camera": { "position": [0,0,5], "look_at": [0,0,0] },
+    "lights": [ { "position": [0, 5, 0] } ], "objects": [ { "type": "sphere", "center": [0,0,0], "radius": 1 } ] })");
+  EXPECT_FALSE(analyzeScene(one, one.render).shadows); // one convex object cannot shadow itself
+  Scene off =
+      sceneFromJson(R"({ "base": "showcase.json", "lights": [ { "position": [0, 5, 0], "shadows": false } ] })");
+  Features f = analyzeScene(off, off.render);
+  EXPECT_FALSE(f.shadows);
+  EXPECT_EQ(f.explain()[1], "shadows: off — every light has shadows: false");
+}
+
+TEST(FeaturesAnalysis, FloorBelowEverythingCannotCastShadows) {
+  Scene s = sceneFromJson(R"({ "base": "showcase.json" })");
+  EXPECT_EQ(planesThatCanOcclude(s), std::vector<bool>{false});
+  // A sphere dipping below the floor makes the floor an occluder for that sphere's lower part.
+  s.spheres[0].center.y = 0.5;
+  EXPECT_EQ(planesThatCanOcclude(s), std::vector<bool>{true});
+  // So does a light under the floor, and a second plane that crosses it.
+  Scene walls = sceneFromJson(R"({ "base": "showcase.json", "objects": [
+      { "type": "plane", "normal": [0, 1, 0], "offset": 0 }, { "type": "plane", "normal": [1, 0, 0], "offset": 3 } ] })");
+  EXPECT_EQ(planesThatCanOcclude(walls), (std::vector<bool>{true, true}));
+}
+
+TEST(RenderStats, NoMirrorsAtDepthTenTracesNoSecondaryRaysAndMatchesDepthZero) {
+  Scene s = sceneFromJson(R"({ "base": "showcase.json", "image": { "width": 64, "height": 48 },
+    "materials": { "mirror": { "reflection": 0 }, "floor": { "reflection": 0 }, "glossy": { "reflection": 0 } } })");
+  s.render.maxDepth = 10;
+  RenderResult deep = render(s);
+  EXPECT_EQ(deep.stats.reflection, 0u);
+  EXPECT_EQ(deep.stats.refraction, 0u);
+  EXPECT_EQ(deep.stats.maxDepth, 0u);
+  s.render.maxDepth = 0;
+  RenderResult flat = render(s);
+  EXPECT_EQ(deep.image.pixels, flat.image.pixels); // bit-identical
+  EXPECT_EQ(deep.stats.total(), flat.stats.total());
+}
+
+TEST(RenderStats, LightsWithoutShadowsTraceNoShadowRays) {
+  Scene s = sceneFromJson(R"({ "base": "showcase.json", "image": { "width": 32, "height": 24 },
+    "lights": [ { "position": [-4, 7, 5] , "shadows": false }, { "position": [5, 5, 3], "shadows": false } ] })");
+  RenderResult r = render(s);
+  EXPECT_EQ(r.stats.shadow, 0u);
+  EXPECT_GT(r.stats.reflection, 0u);
+}
+
+TEST(RenderStats, CountsAreExactPerLevel) {
+  // Every eye ray of the parallel mirrors reflects at every level, and every hit point sees the
+  // light (half-way between the planes) by exactly one unblocked shadow ray.
+  const std::uint64_t pixels = 24 * 16;
+  for (int depth = 0; depth <= 4; ++depth) {
+    Scene s = sceneFromJson(parallelMirrors(0.5, depth, 0.0));
+    RenderResult r = render(s);
+    EXPECT_EQ(r.stats.eye, pixels);
+    EXPECT_EQ(r.stats.reflection, pixels * static_cast<std::uint64_t>(depth)) << "depth " << depth;
+    EXPECT_EQ(r.stats.shadow, pixels * static_cast<std::uint64_t>(depth + 1)) << "depth " << depth;
+    EXPECT_EQ(r.stats.maxDepth, static_cast<std::uint32_t>(depth));
+  }
+}
+
+TEST(RenderStats, MirrorSphereReflectionRaysEqualItsPixels) {
+  // One mirror sphere (bright red ambient) on black: a reflected ray can only escape, so there is
+  // exactly one reflection ray per pixel that sees the sphere, and none at level 2.
+  Scene s = sceneFromJson(R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y": 40 },
+    "image": { "width": 64, "height": 48 }, "ambient": [1, 1, 1], "background": [0, 0, 0.25],
+    "render": { "max_depth": 3, "bailout": 0 },
+    "materials": { "m": { "color": [1, 0, 0], "ambient": 1, "diffuse": 0, "reflection": 0.5 } },
+    "objects": [ { "type": "sphere", "center": [0.2, 0.1, 0], "radius": 1.1, "material": "m" } ] })");
+  RenderResult r = render(s);
+  std::uint64_t spherePixels = 0;
+  for (const auto& p : r.image.pixels) spherePixels += p.x > 0.5f;
+  EXPECT_GT(spherePixels, 500u);
+  EXPECT_EQ(r.stats.reflection, spherePixels);
+  EXPECT_EQ(r.stats.maxDepth, 1u);
+}
+
+TEST(RenderBailout, RaisingItMonotonicallyReducesRaysAndZeroTracesEverything) {
+  std::uint64_t previous = ~0ull;
+  for (double b : {0.0, 1.0 / 1024, 1.0 / 255, 1.0 / 64, 1.0 / 16, 0.3}) {
+    Scene s = sceneFromJson(parallelMirrors(0.7, 12, b));
+    RenderResult r = render(s);
+    EXPECT_LE(r.stats.total(), previous) << "bailout " << b;
+    previous = r.stats.total();
+    if (b == 0.0) {
+      EXPECT_EQ(r.stats.reflection, 24u * 16u * 12u); // every branch to max_depth
+      EXPECT_EQ(r.stats.bailoutSaved, 0u);
+    } else {
+      // Depth k carries weight 0.7^k: the first level below b is not traced.
+      int k = static_cast<int>(std::floor(std::log(b) / std::log(0.7)));
+      std::uint32_t expectedDepth = static_cast<std::uint32_t>(std::clamp(k, 0, 12));
+      EXPECT_EQ(r.stats.maxDepth, expectedDepth) << "bailout " << b;
+    }
+  }
+}
+
+// The error a bailout b introduces: every branch not traced has weight w < b and would have
+// returned at most R, the largest radiance any ray can carry, so each pixel is off by less than
+// (skipped branches) * b * R. With one child per hit (mirrors) at most one branch per eye ray is
+// skipped, and R <= Lmax / (1 - m), where Lmax bounds one hit's local colour (or the background)
+// and m < 1 is the largest weight per bounce: error < b * Lmax / (1 - m).
+TEST(RenderBailout, ErrorIsBoundedByTheThreshold) {
+  // Parallel mirrors, 24 bounces at weight 0.7: every bailout below cuts the tree somewhere.
+  Scene s = sceneFromJson(parallelMirrors(0.7, 24, 0.0));
+  double lmax = 0.0;
+  for (const Material& m : s.materials) {
+    double local = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      double v = m.ambient * m.color[c] * s.ambientLight[c];
+      for (const PointLight& l : s.lights) v += l.color[c] * (m.diffuse * m.color[c] + m.specular);
+      local = std::max(local, v);
+    }
+    lmax = std::max(lmax, local);
+  }
+  for (int c = 0; c < 3; ++c) lmax = std::max(lmax, s.background[c]);
+  double m = 0.7; // the mirrors' reflection, the largest weight per bounce
+  s.render.bailout = 0.0;
+  Image exact = render(s).image;
+  for (double b : {1.0 / 255, 1.0 / 64, 1.0 / 16}) {
+    s.render.bailout = b;
+    Image approx = render(s).image;
+    double bound = b * lmax / (1.0 - m);
+    double worst = 0.0;
+    for (std::size_t i = 0; i < exact.pixels.size(); ++i) {
+      for (int c = 0; c < 3; ++c) worst = std::max(worst, double(std::abs(exact.pixels[i][c] - approx.pixels[i][c])));
+    }
+    EXPECT_LT(worst, bound) << "bailout " << b;
+    EXPECT_GT(worst, 0.0) << "bailout " << b << " changed nothing: the test scene is too easy";
+  }
+}
+
+// For every bundled scene: the specialized pipeline and the all-features one give identical images.
+TEST(RenderSpecialization, ChangesNoPixelInAnyBundledScene) {
+  int scenes = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(VKRAY_SOURCE_DIR "/scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().filename().string());
+    Scene s = loadScene(entry.path());
+    double aspect = double(s.render.width) / s.render.height;
+    s.render.height = 24;
+    s.render.width = static_cast<std::uint32_t>(std::max(1.0, std::round(24 * aspect)));
+    s.render.spp = std::min(s.render.spp, 4);
+    RenderOptions general;
+    general.specialize = false;
+    RenderResult specialized = render(s);
+    RenderResult everything = render(s, general);
+    EXPECT_EQ(specialized.image.pixels, everything.image.pixels);
+    EXPECT_EQ(specialized.stats.total(), everything.stats.total());
+    ++scenes;
+  }
+  EXPECT_GE(scenes, 4);
+}
+
+// Storage-buffer and uniform-buffer scene layouts read the same values.
+TEST(RenderSpecialization, SceneMemoryLayoutsAgree) {
+  Scene s = sceneFromJson(R"({ "base": "showcase.json", "image": { "width": 40, "height": 30 } })");
+  RenderOptions storage;
+  storage.sceneMemory = SceneMemory::Storage;
+  RenderOptions uniform;
+  uniform.sceneMemory = SceneMemory::Uniform;
+  EXPECT_EQ(render(s, storage).image.pixels, render(s, uniform).image.pixels);
+}
+
+} // namespace
+} // namespace vkray::test
