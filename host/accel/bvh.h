@@ -5,6 +5,7 @@
 
 #include <cstdint>
 #include <limits>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -38,33 +39,46 @@ struct Aabb {
 };
 
 struct BvhPrimitive {
-  Aabb bounds;
-  std::uint32_t ref = 0; // kind << kPrimKindShift | index, as in PrimRefs[]
+  Aabb bounds;            // must be finite (buildBvh throws otherwise)
+  std::uint32_t ref = 0;  // kind << kPrimKindShift | index, as in PrimRefs[]
 };
 
 struct BvhOptions {
-  int bins = 16;
-  int maxLeafSize = 4;
+  int bins = 16;              // SAH candidate planes per axis + 1 (at most 32)
+  int maxLeafSize = 4;        // a leaf never holds more (the depth guard keeps this true)
   int maxDepth = 32;          // = kBvhStackSize in the shader: traversal never overflows
   float traversalCost = 1.0f; // SAH cost of visiting a node, relative to one primitive test
+  int threads = 0;            // worker threads; 0: std::thread::hardware_concurrency()
 };
 
 struct BvhStats {
   double buildMs = 0.0;
+  std::size_t primitives = 0;
   std::size_t nodes = 0;
   std::size_t leaves = 0;
   int depth = 0; // longest root-to-leaf path, in nodes
   std::size_t maxLeafSize = 0;
   double sahCost = 0.0; // expected cost of a random ray, in primitive tests
+  int threads = 1;      // threads the build used
 };
 
 struct Bvh {
   std::vector<gpu::BvhNode> nodes;     // nodes[0] is the root; empty when there are no primitives
   std::vector<std::uint32_t> primRefs; // leaf ranges index this
   BvhStats stats;
+
+  std::size_t bytes() const { return nodes.size() * sizeof(gpu::BvhNode) + primRefs.size() * sizeof(std::uint32_t); }
 };
 
-Bvh buildBvh(std::vector<BvhPrimitive> primitives, const BvhOptions& options = {});
+// Builds the tree. Every primitive ends up in exactly one leaf; leaves hold at most
+// options.maxLeafSize primitives and no leaf is deeper than options.maxDepth.
+Bvh buildBvh(const std::vector<BvhPrimitive>& primitives, const BvhOptions& options = {});
+
+// Structural check of a flattened tree against the primitives it was built from: every node's
+// bounds contain its children's (and its primitives'), every reference appears exactly once, the
+// depth and leaf sizes respect the options. Returns an empty string when all holds, else the first
+// violation in words. Used by the tests; cheap enough for a debug assertion.
+std::string checkBvh(const Bvh& bvh, const std::vector<BvhPrimitive>& primitives, const BvhOptions& options = {});
 
 // Bounds of a node as the shader sees them.
 inline Aabb nodeBounds(const gpu::BvhNode& n) {

@@ -1,7 +1,9 @@
 // Packing the scene into GPU arrays (see gpu_scene.h).
 #include "render/gpu_scene.h"
 
+#include <array>
 #include <bit>
+#include <chrono>
 #include <cmath>
 
 #include "scene/features.h"
@@ -25,6 +27,69 @@ float up(double x) {
 }
 
 } // namespace
+
+std::vector<BvhPrimitive> bvhPrimitives(const Scene& scene, const GpuScene& g) {
+  std::vector<BvhPrimitive> prims;
+  prims.reserve(g.spheres.size() + g.triangles.size() + g.polygons.size());
+  for (std::size_t i = 0; i < g.spheres.size(); ++i) {
+    // Bounds from the double centre and radius, rounded outwards: they contain the float sphere.
+    const Sphere& s = scene.spheres[i];
+    glm::dvec3 c = s.center - g.origin;
+    double r = s.radius * (1.0 + 1e-6);
+    Aabb b;
+    b.min = glm::vec3(down(c.x - r), down(c.y - r), down(c.z - r));
+    b.max = glm::vec3(up(c.x + r), up(c.y + r), up(c.z + r));
+    prims.push_back({b, gpu::kPrimSphere << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
+  }
+  for (std::size_t i = 0; i < g.triangles.size(); ++i) {
+    // The float vertices themselves: the box is exact.
+    Aabb b;
+    b.grow(glm::vec3(g.triangles[i].v0));
+    b.grow(glm::vec3(g.triangles[i].v1));
+    b.grow(glm::vec3(g.triangles[i].v2));
+    prims.push_back({b, gpu::kPrimTriangle << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
+  }
+  for (std::size_t i = 0; i < g.polygons.size(); ++i) {
+    Aabb b;
+    for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k) b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
+    prims.push_back({b, gpu::kPrimPolygon << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
+  }
+  return prims;
+}
+
+void orderByLeaves(GpuScene& g) {
+  const std::size_t kinds = 3;
+  std::array<std::uint32_t, kinds> next{};
+  std::vector<gpu::Sphere> spheres(g.spheres.size());
+  std::vector<gpu::Triangle> triangles(g.triangles.size());
+  std::vector<gpu::Polygon> polygons(g.polygons.size());
+  std::vector<glm::vec4> normals;
+  normals.reserve(g.normals.size());
+  for (std::uint32_t& ref : g.bvh.primRefs) {
+    std::uint32_t kind = ref >> gpu::kPrimKindShift;
+    std::uint32_t index = ref & gpu::kPrimIndexMask;
+    std::uint32_t slot = next[kind]++;
+    if (kind == gpu::kPrimSphere) {
+      spheres[slot] = g.spheres[index];
+    } else if (kind == gpu::kPrimTriangle) {
+      gpu::Triangle t = g.triangles[index];
+      std::uint32_t normalBase = std::bit_cast<std::uint32_t>(t.v1.w);
+      if (normalBase != gpu::kNoNormals) {
+        // The shading normals move with their triangle, so a leaf's data stays together.
+        t.v1.w = std::bit_cast<float>(static_cast<std::uint32_t>(normals.size()));
+        for (std::uint32_t k = 0; k < 3; ++k) normals.push_back(g.normals[normalBase + k]);
+      }
+      triangles[slot] = t;
+    } else {
+      polygons[slot] = g.polygons[index];
+    }
+    ref = kind << gpu::kPrimKindShift | slot;
+  }
+  g.spheres = std::move(spheres);
+  g.triangles = std::move(triangles);
+  g.polygons = std::move(polygons);
+  g.normals = std::move(normals);
+}
 
 std::size_t GpuScene::bytes() const {
   return materials.size() * sizeof(gpu::Material) + lights.size() * sizeof(gpu::Light) +
@@ -91,33 +156,11 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
   }
 
   if (withBvh) {
-    std::vector<BvhPrimitive> prims;
-    prims.reserve(scene.boundedPrimitiveCount());
-    for (std::size_t i = 0; i < g.spheres.size(); ++i) {
-      // Bounds from the double centre and radius, rounded outwards: they contain the float sphere.
-      const Sphere& s = scene.spheres[i];
-      glm::dvec3 c = s.center - origin;
-      double r = s.radius * (1.0 + 1e-6);
-      Aabb b;
-      b.min = glm::vec3(down(c.x - r), down(c.y - r), down(c.z - r));
-      b.max = glm::vec3(up(c.x + r), up(c.y + r), up(c.z + r));
-      prims.push_back({b, gpu::kPrimSphere << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
-    }
-    for (std::size_t i = 0; i < g.triangles.size(); ++i) {
-      // The float vertices themselves: the box is exact.
-      Aabb b;
-      b.grow(glm::vec3(g.triangles[i].v0));
-      b.grow(glm::vec3(g.triangles[i].v1));
-      b.grow(glm::vec3(g.triangles[i].v2));
-      prims.push_back({b, gpu::kPrimTriangle << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
-    }
-    for (std::size_t i = 0; i < g.polygons.size(); ++i) {
-      Aabb b;
-      for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k)
-        b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
-      prims.push_back({b, gpu::kPrimPolygon << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
-    }
-    g.bvh = buildBvh(std::move(prims), bvhOptions);
+    auto start = std::chrono::steady_clock::now();
+    g.bvh = buildBvh(bvhPrimitives(scene, g), bvhOptions);
+    orderByLeaves(g);
+    // Build time as --stats reports it: from packed primitives to the final arrays.
+    g.bvh.stats.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }
   return g;
 }

@@ -32,8 +32,19 @@ struct GpuScene {
   std::size_t bytes() const;
 };
 
-// Packs the scene relative to `origin`; builds the BVH when withBvh.
+// Packs the scene relative to `origin`; builds the BVH when withBvh. With a BVH, the primitive
+// arrays are reordered to follow the leaves (see orderByLeaves).
 GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, const BvhOptions& bvhOptions = {});
+
+// The BVH's input: one box per sphere, triangle and polygon of the packed scene, in float and
+// conservative (the float primitive lies inside its box).
+std::vector<BvhPrimitive> bvhPrimitives(const Scene& scene, const GpuScene& g);
+
+// Reorders spheres, triangles (with their shading normals) and polygons into the order their BVH
+// leaves reference them and rewrites the references. Afterwards, in a scene whose bounded
+// primitives are all triangles, primRefs[i] is triangle i: the shader may skip the indirection,
+// and a leaf's triangles sit next to each other in memory.
+void orderByLeaves(GpuScene& g);
 
 // The camera basis as the kernel uses it (forward, right and up scaled by the field of view).
 // An `up` parallel to the view direction falls back to another axis instead of producing NaN.

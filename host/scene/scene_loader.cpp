@@ -1,12 +1,14 @@
 // Scene file -> Scene. One function per JSON section; each validates what it reads.
 #include "scene/scene_loader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <fstream>
 #include <map>
 #include <sstream>
 
 #include "scene/json_reader.h"
+#include "scene/mesh_import.h"
 #include "scene/scene_limits.h"
 #include "util/error.h"
 
@@ -20,6 +22,8 @@ struct LoadContext {
   Scene& scene;
   std::map<std::string, std::uint32_t> materialIds;
   std::filesystem::path baseDir;
+  std::optional<Camera> importedCamera; // from a mesh object with import_camera
+  std::string importedCameraFrom;       // that object's JSON path
 };
 
 void readCamera(const JsonNode& node, Camera& camera) {
@@ -72,6 +76,9 @@ void readRender(const JsonNode& node, RenderSettings& r) {
   if (auto v = node.find("transmissive_shadows")) {
     r.transmissiveShadows =
         v->choice({"attenuated", "opaque"}) == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
+  }
+  if (auto v = node.find("precision")) {
+    r.precision = v->choice({"float32", "float64"}) == "float64" ? Precision::Float64 : Precision::Float32;
   }
   if (auto v = node.find("bvh")) {
     std::string mode = v->choice({"auto", "on", "off"});
@@ -248,11 +255,89 @@ void readTriangle(const JsonNode& obj, LoadContext& ctx) {
   ctx.scene.triangles.push_back(tri);
 }
 
+// A mesh's placement: translate / rotate / scale, or a row-major 4x4 affine `matrix`.
+glm::dmat4 readTransform(const JsonNode& node) {
+  node.expectObject();
+  node.allowKeys({"translate", "rotate", "scale", "matrix"});
+  glm::dmat4 m(1.0);
+  if (auto mat = node.find("matrix")) {
+    if (node.find("translate") || node.find("rotate") || node.find("scale")) {
+      mat->fail("give either 'matrix' or translate/rotate/scale, not both");
+    }
+    mat->expectArray();
+    if (mat->size() != 16) mat->fail("needs 16 numbers (4 rows of 4), got " + std::to_string(mat->size()));
+    for (std::size_t i = 0; i < 16; ++i) m[static_cast<int>(i % 4)][static_cast<int>(i / 4)] = (*mat)[i].number();
+    if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0) {
+      mat->fail("must be affine: its last row must be 0, 0, 0, 1");
+    }
+  } else {
+    dvec3 translate(0.0);
+    dvec3 rotate(0.0);
+    dvec3 scale(1.0);
+    if (auto t = node.find("translate")) translate = t->vec3();
+    if (auto r = node.find("rotate")) rotate = r->vec3();
+    if (auto sc = node.find("scale")) {
+      if (sc->isArray()) {
+        scale = sc->vec3();
+      } else {
+        double k = sc->number();
+        scale = dvec3(k);
+      }
+    }
+    m = composeTransform(translate, rotate, scale);
+  }
+  double det = glm::determinant(glm::dmat3(m));
+  if (!(std::abs(det) > 0.0) || !std::isfinite(det)) node.fail("is singular (it flattens the mesh: determinant 0)");
+  return m;
+}
+
+void readMesh(const JsonNode& obj, LoadContext& ctx) {
+  obj.allowKeys({"type", "file", "transform", "material", "normals", "import_camera", "import_lights", "light_scale"});
+  JsonNode fileNode = obj.at("file");
+  std::string file = fileNode.string();
+  if (file.empty()) fileNode.fail("must name a mesh file");
+  MeshRequest request;
+  request.file = ctx.baseDir / file;
+  request.shownAs = request.file.lexically_normal().string();
+  if (auto t = obj.find("transform")) request.worldFromMesh = readTransform(*t);
+  if (obj.find("material")) request.material = readObjectMaterial(obj, ctx);
+  if (auto n = obj.find("normals")) {
+    std::string mode = n->choice({"auto", "flat", "smooth"});
+    request.normals = mode == "flat" ? MeshNormals::Flat : mode == "smooth" ? MeshNormals::Smooth : MeshNormals::Auto;
+  }
+  std::string ext = request.file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  bool gltf = ext == ".gltf" || ext == ".glb";
+  if (auto c = obj.find("import_camera")) {
+    request.importCamera = c->boolean();
+    if (request.importCamera && !gltf) c->fail("only glTF files (.gltf, .glb) carry cameras");
+    if (request.importCamera && ctx.importedCamera) {
+      c->fail("a camera is already imported by " + ctx.importedCameraFrom);
+    }
+  }
+  if (auto l = obj.find("import_lights")) {
+    request.importLights = l->boolean();
+    if (request.importLights && !gltf) l->fail("only glTF files (.gltf, .glb) carry lights");
+  }
+  if (auto k = obj.find("light_scale")) request.lightScale = k->number(0.0, 1e6);
+  request.defaultMaterial = [&ctx] { return defaultMaterial(ctx); };
+  std::optional<Camera> camera;
+  try {
+    camera = importMesh(request, ctx.scene);
+  } catch (const InputError& e) {
+    fileNode.fail(e.what());
+  }
+  if (camera) {
+    ctx.importedCamera = camera;
+    ctx.importedCameraFrom = obj.path();
+  }
+}
+
 void readObjects(const JsonNode& node, LoadContext& ctx) {
   for (std::size_t i = 0; i < node.size(); ++i) {
     JsonNode obj = node[i];
     obj.expectObject();
-    std::string type = obj.at("type").choice({"sphere", "plane", "polygon", "triangle"});
+    std::string type = obj.at("type").choice({"sphere", "plane", "polygon", "triangle", "mesh"});
     if (type == "sphere") {
       obj.allowKeys({"type", "center", "radius", "material"});
       Sphere s;
@@ -275,6 +360,8 @@ void readObjects(const JsonNode& node, LoadContext& ctx) {
       readPolygon(obj, ctx);
     } else if (type == "triangle") {
       readTriangle(obj, ctx);
+    } else if (type == "mesh") {
+      readMesh(obj, ctx);
     }
     if (ctx.scene.objectCount() > kMaxPrimitives) {
       obj.fail("too many primitives: more than " + std::to_string(kMaxPrimitives));
@@ -284,13 +371,15 @@ void readObjects(const JsonNode& node, LoadContext& ctx) {
 
 Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::filesystem::path& baseDir) {
   Scene scene;
-  LoadContext ctx{scene, {}, baseDir};
+  LoadContext ctx{scene, {}, baseDir, std::nullopt, {}};
   JsonNode root(doc, "", name);
   root.expectObject();
   root.allowKeys(
       {"description", "base", "camera", "image", "background", "ambient", "render", "materials", "lights", "objects"});
   if (auto d = root.find("description")) d->string();
-  readCamera(root.at("camera"), scene.camera);
+  // The camera may instead come from a glTF file (a mesh object with import_camera).
+  auto cameraNode = root.find("camera");
+  if (cameraNode) readCamera(*cameraNode, scene.camera);
   bool sawBackground = false;
   bool sawAmbient = false;
   if (auto img = root.find("image")) readImage(*img, scene, sawBackground, sawAmbient);
@@ -306,6 +395,12 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
   if (auto m = root.find("materials")) readMaterials(*m, ctx);
   if (auto l = root.find("lights")) readLights(*l, scene);
   if (auto o = root.find("objects")) readObjects(*o, ctx);
+  if (ctx.importedCamera) {
+    if (cameraNode) cameraNode->fail("given twice (" + ctx.importedCameraFrom + " imports one: import_camera)");
+    scene.camera = *ctx.importedCamera;
+  } else if (!cameraNode) {
+    root.at("camera"); // throws: missing required key
+  }
   if (scene.materials.size() > kMaxMaterialCount) {
     root.at("materials")
         .fail("too many materials: " + std::to_string(scene.materials.size()) + " (at most " +
@@ -330,9 +425,18 @@ std::string readSceneFile(const std::filesystem::path& path, const std::string& 
   }
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(shownAs, "cannot open for reading");
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
+  // Read no further than the cap: a device or a pipe (/dev/zero, a FIFO) has no size to check first.
+  std::string text;
+  std::vector<char> chunk(1 << 16);
+  while (in.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) || in.gcount() > 0) {
+    text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
+    if (text.size() > kMaxSceneFileBytes) {
+      throw InputError(shownAs, "file too large to be a scene (more than " + std::to_string(kMaxSceneFileBytes) +
+                                    " bytes)");
+    }
+  }
+  if (in.bad()) throw InputError(shownAs, "cannot read");
+  return text;
 }
 
 // "base": "other.json" makes a scene a patch of another (RFC 7386 JSON merge patch): objects merge
@@ -344,8 +448,12 @@ nlohmann::json resolveBase(nlohmann::json doc, const std::string& name, const st
   std::string baseName = node.string();
   if (depth >= 8) node.fail("too many nested base scenes (a cycle?)");
   std::filesystem::path basePath = baseDir / baseName;
-  std::string text = readSceneFile(basePath, basePath.string());
-  nlohmann::json base = parseJsonText(text, basePath.string());
+  nlohmann::json base;
+  try {
+    base = parseJsonText(readSceneFile(basePath, basePath.string()), basePath.string());
+  } catch (const InputError& e) {
+    node.fail(e.what()); // names the key that brought the file in
+  }
   base = resolveBase(std::move(base), basePath.string(), basePath.parent_path(), depth + 1);
   doc.erase("base");
   base.merge_patch(doc);

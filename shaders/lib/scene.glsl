@@ -6,6 +6,11 @@
 #include "../shared/gpu_types.h"
 #include "common.glsl"
 
+// Subgroup operations for the packet traversal (traverseBvhPerSubgroup).
+#extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_ballot : require
+
 // ---- Specialization: what this scene calls for ---------------------------------------------------
 layout(constant_id = kSpecHasSpheres) const bool HAS_SPHERES = true;
 layout(constant_id = kSpecHasPlanes) const bool HAS_PLANES = true;
@@ -92,6 +97,13 @@ vec3 loadPolyVertex(uint i) {
 #define VKRAY_POLYGON_VERTEX(i) loadPolyVertex(i)
 #include "intersect.glsl"
 
+// The float64 variant of the kernel (built with -DVKRAY_FLOAT64) intersects in double: the
+// accuracy report's reference. It ignores NUMERICS; shading stays in float.
+#ifdef VKRAY_FLOAT64
+#extension GL_ARB_gpu_shader_fp64 : enable
+#include "intersect64.glsl"
+#endif
+
 // ---- Hits ----------------------------------------------------------------------------------------
 const uint kNoHit = 0xFFFFFFFFu;
 
@@ -132,24 +144,41 @@ TraceRay makeTraceRay(vec3 origin, vec3 dir) {
 
 float sphereT(TraceRay r, uint i, float tMax) {
   vec4 s = loadSphere(i).centerRadius;
+#ifdef VKRAY_FLOAT64
+  return intersectSphere64(r.ray, s.xyz, s.w, tMax);
+#endif
   return ROBUST ? intersectSphereRobust(r.ray, 1.0, s.xyz, s.w, tMax)
                 : intersectSphereNaive(r.ray, s.xyz, s.w, tMax);
 }
 
 float triangleT(TraceRay r, uint i, float tMax, out vec3 bary) {
   Triangle tri = loadTriangle(i);
+#ifdef VKRAY_FLOAT64
+  return intersectTriangle64(r.ray, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary);
+#endif
   return ROBUST ? intersectTriangleRobust(r.ray, r.w, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary)
                 : intersectTriangleNaive(r.ray, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary);
 }
 
 float polygonT(TraceRay r, uint i, float tMax) {
   Polygon poly = loadPolygon(i);
+#ifdef VKRAY_FLOAT64
+  // Inside test as in float (edge functions are exact for the sign that matters), t in double.
+  float tf = intersectPolygonRobust(r.ray, r.w, poly.plane.xyz, poly.meta.x, poly.meta.y, tMax);
+  if (tf < 0.0) return -1.0;
+  dvec3 n = dvec3(poly.plane.xyz);
+  double td = dot(n, dvec3(loadPolyVertex(poly.meta.x)) - dvec3(r.ray.origin)) / dot(n, dvec3(r.ray.dir));
+  return (td > 0.0 && td < double(tMax)) ? max(float(td), 1.4e-45) : -1.0;
+#endif
   return ROBUST ? intersectPolygonRobust(r.ray, r.w, poly.plane.xyz, poly.meta.x, poly.meta.y, tMax)
                 : intersectPolygonNaive(r.ray, poly.plane.xyz, poly.meta.x, poly.meta.y, tMax);
 }
 
 float planeT(TraceRay r, uint i, float tMax) {
   vec4 pl = loadPlane(i).normalOffset;
+#ifdef VKRAY_FLOAT64
+  return intersectPlane64(r.ray, pl.xyz, pl.w, tMax);
+#endif
   return ROBUST ? intersectPlaneRobust(r.ray, pl.xyz, pl.w, tMax)
                 : intersectPlaneNaive(r.ray, pl.xyz, pl.w, tMax);
 }
@@ -184,37 +213,177 @@ bool hitsBox(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
 
 const int kBvhStackSize = 32; // the builder caps tree depth at this (host/accel/bvh.h)
 
-// Closest hit over the BVH's bounded primitives; with anyHit, returns at the first hit found.
-void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
+// A BVH leaf entry: the primitive's kind and index. In a scene whose bounded primitives are all
+// triangles the host stores them in leaf order (host/render/gpu_scene.cpp, orderByLeaves), so the
+// entry is the triangle itself and the PrimRefs[] read is skipped.
+void leafPrimitive(uint entry, out uint kind, out uint index) {
+  if (!HAS_SPHERES && !HAS_POLYGONS) {
+    kind = kPrimTriangle;
+    index = entry;
+  } else {
+    uint ref = primRefs[entry];
+    kind = ref >> kPrimKindShift;
+    index = ref & kPrimIndexMask;
+  }
+}
+
+// ---- Traversal for wide SIMD (GPUs): every invocation walks the tree on its own --------------------
+
+// "While-while" order (Aila & Laine, "Understanding the Efficiency of Ray Traversal on GPUs",
+// HPG 2009): an invocation descends interior nodes until it holds a leaf, then the subgroup tests
+// leaf primitives together, so an iteration of either loop does one kind of work.
+void traverseBvhPerInvocation(TraceRay r, inout Hit hit, bool anyHit) {
   uint stack[kBvhStackSize];
   int sp = 0;
   uint node = 0u;
+  uint leafFirst = 0u;
+  uint leafCount = 0u;
+  bool done = false;
   bvec3 dirNeg = lessThan(r.ray.dir, vec3(0.0));
-  while (true) {
-    BvhNode n = bvhNodes[node];
-    if (hitsBox(r, n.boundsMin, n.boundsMax, hit.t)) {
+  while (!done || leafCount > 0u) {
+    while (leafCount == 0u && !done) {
+      BvhNode n = bvhNodes[node];
+      bool enter = hitsBox(r, n.boundsMin, n.boundsMax, hit.t);
       uint count = n.countAxis & 0xFFFFu;
-      if (count > 0u) {
-        for (uint i = 0u; i < count; ++i) {
-          uint ref = primRefs[n.offset + i];
-          testPrimitive(r, ref >> kPrimKindShift, ref & kPrimIndexMask, hit);
-          if (anyHit && hit.kind != kNoHit) return;
-        }
-        if (sp == 0) break;
-        node = stack[--sp];
-      } else {
-        // Visit the child on the near side of the split first; the far one waits on the stack.
+      if (enter && count == 0u) {
+        // Visit the child on the near side of the split first; the far one waits on the stack
+        // (the builder caps the depth at kBvhStackSize, so it never overflows).
         uint axis = (n.countAxis >> 16u) & 3u;
-        uint nearChild = dirNeg[axis] ? n.offset : node + 1u;
-        uint farChild = dirNeg[axis] ? node + 1u : n.offset;
-        // The builder caps the depth at kBvhStackSize, so the guard never drops a subtree.
-        if (sp < kBvhStackSize) stack[sp++] = farChild;
-        node = nearChild;
+        stack[sp++] = dirNeg[axis] ? node + 1u : n.offset;
+        node = dirNeg[axis] ? n.offset : node + 1u;
+      } else {
+        if (enter) {
+          leafFirst = n.offset;
+          leafCount = count;
+        }
+        if (sp == 0) {
+          done = true;
+        } else {
+          node = stack[--sp];
+        }
       }
+    }
+    while (leafCount > 0u) {
+      uint kind;
+      uint index;
+      leafPrimitive(leafFirst, kind, index);
+      testPrimitive(r, kind, index, hit);
+      ++leafFirst;
+      --leafCount;
+      if (anyHit && hit.kind != kNoHit) return;
+    }
+  }
+}
+
+// ---- Traversal for narrow SIMD (lavapipe): the subgroup walks the tree together --------------------
+//
+// On lavapipe a storage-buffer read is a loop over the 8 lanes with one scalar load each, and
+// inserting each scalar into the lane's vector stalls on store forwarding (docs/performance.md,
+// "Meshes"): it is the cost of the whole traversal. So the subgroup visits one node at a time, as a
+// packet of rays (Wald et al., "Interactive Rendering with Coherent Ray Tracing", EG 2001): one
+// invocation reads the node or triangle and the others receive it by broadcast; a node is entered
+// when any ray enters it, each ray against its own closest hit so far. Every ray still meets every
+// node and primitive it would meet alone, so the closest hit is the same.
+
+// triangleT() on vertices already at hand.
+float triangleTAt(TraceRay r, vec3 v0, vec3 v1, vec3 v2, float tMax, out vec3 bary) {
+#ifdef VKRAY_FLOAT64
+  return intersectTriangle64(r.ray, v0, v1, v2, tMax, bary);
+#endif
+  return ROBUST ? intersectTriangleRobust(r.ray, r.w, v0, v1, v2, tMax, bary)
+                : intersectTriangleNaive(r.ray, v0, v1, v2, tMax, bary);
+}
+
+// Each iteration reads one record, a node or a leaf's next triangle, so the broadcasts (the
+// dearest part after the reads) are paid once per iteration: lavapipe executes both sides of every
+// branch, so a node step and a triangle test in separate branches would each pay for both.
+void traverseBvhPerSubgroup(TraceRay r, inout Hit hit, bool anyHit) {
+  uint stack[kBvhStackSize];
+  int sp = 0;
+  uint node = 0u;
+  uint leafNext = 0u; // leaf entries still to test: [leafNext, leafEnd)
+  uint leafEnd = 0u;
+  bool stackEmpty = false;
+  bool searching = true; // false once an any-hit ray has its hit
+  // Near child first by the packet's majority direction along the split axis.
+  uint lanes = subgroupAdd(1u);
+  uvec3 negative = uvec3(subgroupAdd(uint(r.ray.dir.x < 0.0)), subgroupAdd(uint(r.ray.dir.y < 0.0)),
+                         subgroupAdd(uint(r.ray.dir.z < 0.0)));
+  bvec3 dirNeg = greaterThan(2u * negative, uvec3(lanes));
+  while (true) {
+    bool primitive = leafNext < leafEnd; // the same in every invocation
+    uint kind = kPrimTriangle;
+    uint index = 0u;
+    if (primitive) leafPrimitive(leafNext, kind, index);
+    // One invocation reads the record; the others receive it.
+    vec3 a = vec3(0.0);
+    vec3 b = vec3(0.0);
+    vec3 c = vec3(0.0);
+    uvec2 meta = uvec2(0u);
+    if (subgroupElect()) {
+      if (!primitive) {
+        BvhNode n = bvhNodes[node];
+        a = n.boundsMin;
+        b = n.boundsMax;
+        meta = uvec2(n.offset, n.countAxis);
+      } else if (kind == kPrimTriangle) {
+        Triangle tri = loadTriangle(index);
+        a = tri.v0.xyz;
+        b = tri.v1.xyz;
+        c = tri.v2.xyz;
+      }
+    }
+    a = subgroupBroadcastFirst(a);
+    b = subgroupBroadcastFirst(b);
+    c = subgroupBroadcastFirst(c);
+    meta = subgroupBroadcastFirst(meta);
+
+    if (primitive) {
+      if (kind == kPrimTriangle) {
+        vec3 bary;
+        float t = triangleTAt(r, a, b, c, hit.t, bary);
+        if (t > 0.0) hit = Hit(t, kPrimTriangle, index, bary);
+      } else {
+        testPrimitive(r, kind, index, hit); // spheres and polygons: each invocation reads its own
+      }
+      ++leafNext;
+      if (anyHit) {
+        searching = searching && hit.kind == kNoHit;
+        if (subgroupOr(uint(searching)) == 0u) break;
+      }
+      if (stackEmpty && leafNext == leafEnd) break;
+      continue;
+    }
+    bool enter = searching && hitsBox(r, a, b, hit.t);
+    bool anyEnter = subgroupOr(uint(enter)) != 0u;
+    uint count = meta.y & 0xFFFFu;
+    if (anyEnter && count == 0u) {
+      uint axis = (meta.y >> 16u) & 3u;
+      stack[sp++] = dirNeg[axis] ? node + 1u : meta.x; // depth <= kBvhStackSize: never overflows
+      node = dirNeg[axis] ? meta.x : node + 1u;
+      continue;
+    }
+    if (anyEnter) {
+      leafNext = meta.x;
+      leafEnd = meta.x + count;
+    }
+    if (sp == 0) {
+      if (leafNext == leafEnd) break;
+      stackEmpty = true;
     } else {
-      if (sp == 0) break;
       node = stack[--sp];
     }
+  }
+}
+
+// Closest hit over the BVH's bounded primitives; with anyHit, stops at the first hit found. The
+// subgroup size is a constant of the driver (8 on lavapipe with 256-bit vectors), so only one of
+// the two traversals is compiled.
+void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
+  if (gl_SubgroupSize <= 8u) {
+    traverseBvhPerSubgroup(r, hit, anyHit);
+  } else {
+    traverseBvhPerInvocation(r, hit, anyHit);
   }
 }
 
@@ -263,13 +432,22 @@ Surface surfaceAt(TraceRay r, Hit hit) {
   s.kind = hit.kind;
   if (hit.kind == kPrimSphere) {
     Sphere sph = loadSphere(hit.index);
+#ifdef VKRAY_FLOAT64
+    sphereSurface64(r.ray, hit.t, sph.centerRadius.xyz, sph.centerRadius.w, s.p, s.ng, s.errorBound);
+#else
     sphereSurface(r.ray, hit.t, sph.centerRadius.xyz, sph.centerRadius.w, s.p, s.ng, s.errorBound);
+#endif
     s.ns = s.ng;
     s.material = sph.meta.x;
   } else if (hit.kind == kPrimTriangle) {
     Triangle tri = loadTriangle(hit.index);
+#ifdef VKRAY_FLOAT64
+    if (true) {
+      triangleSurface64(hit.bary, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, s.p, s.ng, s.errorBound);
+#else
     if (ROBUST) {
       triangleSurface(hit.bary, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, s.p, s.ng, s.errorBound);
+#endif
     } else {
       vec3 unused;
       triangleSurface(hit.bary, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, unused, s.ng, s.errorBound);

@@ -1,0 +1,396 @@
+// `vkray bench meshes`: for procedural meshes from 1k to 1M triangles, the BVH's build time,
+// size and depth and the GPU's primary- and shadow-ray throughput at 800x600; and, when built
+// with Embree 3, the same triangles and the same rays through rtcIntersect1 / rtcOccluded1.
+// Figures only, never pass/fail (docs/performance.md, "Meshes").
+#include "app/bench_meshes.h"
+
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <thread>
+
+#include <sys/resource.h>
+
+#include "app/bench.h"
+#include "render/gpu_scene.h"
+#include "render/renderer.h"
+#include "util/error.h"
+#include "vk/context.h"
+
+#ifdef VKRAY_HAVE_EMBREE
+#include <embree3/rtcore.h>
+#endif
+
+namespace vkray {
+
+MeshData proceduralTorus(std::size_t triangles) {
+  // u around the ring, v around the tube; 2 u v triangles, u = 2 v.
+  auto v = static_cast<std::size_t>(std::max(2.0, std::round(std::sqrt(static_cast<double>(triangles) / 4.0))));
+  std::size_t u = 2 * v;
+  const double ringRadius = 1.0;
+  const double tubeRadius = 0.35;
+  MeshData mesh;
+  mesh.positions.reserve(u * v);
+  for (std::size_t i = 0; i < u; ++i) {
+    double a = 2.0 * M_PI * static_cast<double>(i) / static_cast<double>(u);
+    for (std::size_t j = 0; j < v; ++j) {
+      double b = 2.0 * M_PI * static_cast<double>(j) / static_cast<double>(v);
+      // Bumps at two scales, so that small triangles still see curvature.
+      double r = tubeRadius * (1.0 + 0.12 * std::sin(7.0 * a) * std::sin(5.0 * b) + 0.03 * std::sin(41.0 * a + 3.0 * b));
+      mesh.positions.emplace_back((ringRadius + r * std::cos(b)) * std::cos(a), r * std::sin(b),
+                                  (ringRadius + r * std::cos(b)) * std::sin(a));
+    }
+  }
+  auto id = [&](std::size_t i, std::size_t j) { return static_cast<std::uint32_t>((i % u) * v + (j % v)); };
+  mesh.faces.reserve(2 * u * v);
+  for (std::size_t i = 0; i < u; ++i) {
+    for (std::size_t j = 0; j < v; ++j) {
+      // Counter-clockwise seen from outside the tube.
+      mesh.faces.push_back({id(i, j), id(i, j + 1), id(i + 1, j + 1)});
+      mesh.faces.push_back({id(i, j), id(i + 1, j + 1), id(i + 1, j)});
+    }
+  }
+  return mesh;
+}
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msSince(Clock::time_point t) {
+  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
+}
+
+// CPU time of the whole process (every lavapipe worker thread included), in ms. On a shared,
+// noisy machine it varies far less than wall or GPU-timestamp time.
+double processCpuMs() {
+  rusage u{};
+  getrusage(RUSAGE_SELF, &u);
+  return (u.ru_utime.tv_sec + u.ru_stime.tv_sec) * 1e3 + (u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-3;
+}
+
+// Median GPU time and mean process CPU time of `runs` renders with an already built pipeline.
+std::pair<double, double> timeRenders(Renderer& renderer, const Scene& scene, const RenderOptions& options, int runs) {
+  std::vector<double> gpu;
+  double cpu0 = processCpuMs();
+  for (int i = 0; i < runs; ++i) gpu.push_back(renderer.render(scene.camera, scene.render, options).timings.traceMs);
+  return {median(gpu), (processCpuMs() - cpu0) / runs};
+}
+
+Scene benchScene(const MeshData& mesh, const BenchMeshesArgs& args, bool shadows) {
+  Scene scene;
+  scene.camera.position = {0.0, 1.9, 2.6};
+  scene.camera.lookAt = {0.0, -0.1, 0.0};
+  scene.camera.fovY = 45.0;
+  scene.render.width = args.width;
+  scene.render.height = args.height;
+  scene.render.maxDepth = 0;
+  scene.render.bvh = BvhMode::On;
+  scene.ambientLight = glm::dvec3(0.2);
+  scene.background = glm::dvec3(0.1, 0.1, 0.15);
+  PointLight light;
+  light.position = {2.0, 4.0, 1.0};
+  light.shadows = shadows;
+  scene.lights.push_back(light);
+  MeshRequest request;
+  request.shownAs = "procedural torus";
+  request.normals = MeshNormals::Flat;
+  appendMesh(mesh, request, scene);
+  return scene;
+}
+
+struct Row {
+  std::size_t triangles = 0;
+  double buildMs = 0.0;
+  std::size_t nodes = 0;
+  int depth = 0;
+  double bytesPerTriangle = 0.0;
+  double primaryMs = 0.0; // GPU time of eye rays + shading
+  double shadowMs = 0.0;  // GPU time the shadow rays add
+  double primaryCpuMs = 0.0; // process CPU time of the same (lavapipe: all worker threads)
+  double shadowCpuMs = 0.0;
+  std::uint64_t eyeRays = 0;
+  std::uint64_t shadowRays = 0;
+  // Embree (0 when not measured)
+  double embreeBuildMs = 0.0;
+  double embreeBytesPerTriangle = 0.0;
+  double embreePrimaryMs = 0.0;
+  double embreeShadowMs = 0.0;
+  std::uint64_t embreeShadowRays = 0;
+  std::uint64_t embreeHits = 0;
+
+  double primaryMrays() const { return primaryMs > 0 ? eyeRays / (primaryMs * 1e3) : 0.0; }
+  double shadowMrays() const { return shadowMs > 0 ? shadowRays / (shadowMs * 1e3) : 0.0; }
+  double embreePrimaryMrays() const { return embreePrimaryMs > 0 ? eyeRays / (embreePrimaryMs * 1e3) : 0.0; }
+  double embreeShadowMrays() const {
+    return embreeShadowMs > 0 ? embreeShadowRays / (embreeShadowMs * 1e3) : 0.0;
+  }
+};
+
+#ifdef VKRAY_HAVE_EMBREE
+
+std::atomic<long long> gEmbreeBytes{0};
+
+bool embreeMemoryMonitor(void*, ssize_t bytes, bool) {
+  gEmbreeBytes += bytes;
+  return true;
+}
+
+// The same float triangles (camera-relative, as packed for the GPU) and the same rays: eye rays
+// through pixel centres, then a shadow ray from every hit that faces the light. Both phases run on
+// all cores (as lavapipe does), one rtcIntersect1 / rtcOccluded1 per ray.
+void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& args, Row& row) {
+  RTCDevice device = rtcNewDevice(nullptr);
+  if (!device) throw Error("embree: rtcNewDevice failed");
+  rtcSetDeviceMemoryMonitorFunction(device, embreeMemoryMonitor, nullptr);
+  const std::size_t n = g.triangles.size();
+  // Embree reads vertices with 16-byte loads: one float of padding after the last.
+  std::vector<float> vertices(9 * n + 1, 0.0f);
+  std::vector<std::uint32_t> indices(3 * n);
+  for (std::size_t i = 0; i < n; ++i) {
+    const glm::vec4* v[3] = {&g.triangles[i].v0, &g.triangles[i].v1, &g.triangles[i].v2};
+    for (int k = 0; k < 3; ++k) {
+      vertices[9 * i + 3 * k + 0] = v[k]->x;
+      vertices[9 * i + 3 * k + 1] = v[k]->y;
+      vertices[9 * i + 3 * k + 2] = v[k]->z;
+      indices[3 * i + k] = static_cast<std::uint32_t>(3 * i + k);
+    }
+  }
+  RTCScene rtcScene = nullptr;
+  double best = 1e30;
+  for (int attempt = 0; attempt < 2; ++attempt) {
+    if (rtcScene) rtcReleaseScene(rtcScene);
+    gEmbreeBytes = 0;
+    auto t0 = Clock::now();
+    rtcScene = rtcNewScene(device);
+    RTCGeometry geom = rtcNewGeometry(device, RTC_GEOMETRY_TYPE_TRIANGLE);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, vertices.data(), 0,
+                               3 * sizeof(float), 3 * n);
+    rtcSetSharedGeometryBuffer(geom, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, indices.data(), 0,
+                               3 * sizeof(std::uint32_t), n);
+    rtcCommitGeometry(geom);
+    rtcAttachGeometry(rtcScene, geom);
+    rtcReleaseGeometry(geom);
+    rtcCommitScene(rtcScene);
+    best = std::min(best, msSince(t0));
+  }
+  row.embreeBuildMs = best;
+  row.embreeBytesPerTriangle = static_cast<double>(gEmbreeBytes.load()) / static_cast<double>(n);
+
+  const std::uint32_t w = args.width;
+  const std::uint32_t h = args.height;
+  CameraFrame cam = makeCameraFrame(scene.camera, w, h);
+  const glm::vec3 light = glm::vec3(scene.lights[0].position - g.origin);
+  const unsigned threads = std::max(1u, std::thread::hardware_concurrency());
+  std::vector<float> hitT(static_cast<std::size_t>(w) * h);
+  std::vector<glm::vec3> hitN(hitT.size());
+  std::vector<glm::vec3> dirs(hitT.size());
+  for (std::uint32_t y = 0; y < h; ++y) {
+    for (std::uint32_t x = 0; x < w; ++x) {
+      dirs[static_cast<std::size_t>(y) * w + x] = glm::vec3(glm::normalize(cam.rayDirection(x + 0.5, y + 0.5, w, h)));
+    }
+  }
+  auto parallelRows = [&](auto&& body) {
+    std::atomic<std::uint32_t> nextRow{0};
+    std::vector<std::thread> pool;
+    for (unsigned t = 0; t < threads; ++t) {
+      pool.emplace_back([&] {
+        RTCIntersectContext context;
+        rtcInitIntersectContext(&context);
+        for (std::uint32_t y0 = nextRow.fetch_add(8); y0 < h; y0 = nextRow.fetch_add(8)) {
+          for (std::uint32_t y = y0; y < std::min(h, y0 + 8); ++y) body(context, y);
+        }
+      });
+    }
+    for (auto& t : pool) t.join();
+  };
+  std::vector<double> primaryTimes;
+  std::vector<double> shadowTimes;
+  std::atomic<std::uint64_t> shadowRays{0};
+  std::atomic<std::uint64_t> hits{0};
+  for (int run = 0; run < std::max(1, args.runs); ++run) {
+    auto t0 = Clock::now();
+    parallelRows([&](RTCIntersectContext& context, std::uint32_t y) {
+      for (std::uint32_t x = 0; x < w; ++x) {
+        std::size_t i = static_cast<std::size_t>(y) * w + x;
+        RTCRayHit rh{};
+        rh.ray.org_x = rh.ray.org_y = rh.ray.org_z = 0.0f;
+        rh.ray.dir_x = dirs[i].x;
+        rh.ray.dir_y = dirs[i].y;
+        rh.ray.dir_z = dirs[i].z;
+        rh.ray.tnear = 0.0f;
+        rh.ray.tfar = INFINITY;
+        rh.ray.mask = 0xFFFFFFFFu;
+        rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+        rtcIntersect1(rtcScene, &context, &rh);
+        bool hit = rh.hit.geomID != RTC_INVALID_GEOMETRY_ID;
+        hitT[i] = hit ? rh.ray.tfar : -1.0f;
+        hitN[i] = glm::vec3(rh.hit.Ng_x, rh.hit.Ng_y, rh.hit.Ng_z);
+      }
+    });
+    primaryTimes.push_back(msSince(t0));
+    shadowRays = 0;
+    hits = 0;
+    t0 = Clock::now();
+    parallelRows([&](RTCIntersectContext& context, std::uint32_t y) {
+      std::uint64_t localRays = 0;
+      std::uint64_t localHits = 0;
+      for (std::uint32_t x = 0; x < w; ++x) {
+        std::size_t i = static_cast<std::size_t>(y) * w + x;
+        if (hitT[i] < 0.0f) continue;
+        ++localHits;
+        glm::vec3 p = hitT[i] * dirs[i];
+        glm::vec3 n = glm::normalize(hitN[i]);
+        if (glm::dot(n, dirs[i]) > 0.0f) n = -n;
+        glm::vec3 l = light - p;
+        if (glm::dot(n, l) <= 0.0f) continue; // light behind the surface: no ray (as the kernel)
+        ++localRays;
+        glm::vec3 o = p + n * (1e-4f * (1.0f + glm::length(p)));
+        RTCRay ray{};
+        ray.org_x = o.x;
+        ray.org_y = o.y;
+        ray.org_z = o.z;
+        ray.dir_x = l.x;
+        ray.dir_y = l.y;
+        ray.dir_z = l.z;
+        ray.tnear = 0.0f;
+        ray.tfar = 1.0f;
+        ray.mask = 0xFFFFFFFFu;
+        rtcOccluded1(rtcScene, &context, &ray);
+      }
+      shadowRays += localRays;
+      hits += localHits;
+    });
+    shadowTimes.push_back(msSince(t0));
+  }
+  row.embreePrimaryMs = median(primaryTimes);
+  row.embreeShadowMs = median(shadowTimes);
+  row.embreeShadowRays = shadowRays.load();
+  row.embreeHits = hits.load();
+  rtcReleaseScene(rtcScene);
+  rtcReleaseDevice(device);
+}
+
+#endif
+
+} // namespace
+
+int runBenchMeshes(const BenchMeshesArgs& args) {
+  vulkan::ContextOptions ctxOptions;
+  ctxOptions.device = args.device.device;
+  ctxOptions.validation = args.device.validate;
+  vulkan::Context context(ctxOptions);
+  bool embree = false;
+#ifdef VKRAY_HAVE_EMBREE
+  embree = !args.noEmbree;
+#endif
+  std::printf("device: %s (%s), %ux%u, median of %d runs; %u CPU threads\n", context.info().name.c_str(),
+              context.info().driver.c_str(), args.width, args.height, args.runs, std::thread::hardware_concurrency());
+#ifdef VKRAY_HAVE_EMBREE
+  if (embree) std::printf("embree: %s, rtcIntersect1 / rtcOccluded1 on every CPU thread\n", RTC_VERSION_STRING);
+#endif
+  if (!embree) std::printf("embree: not measured (vkray built without Embree 3, or --no-embree)\n");
+  std::fflush(stdout);
+  Renderer renderer(context, nullptr);
+  RenderOptions options;
+  options.countStats = false;
+  std::vector<Row> rows;
+  for (std::size_t size : args.sizes) {
+    MeshData mesh = proceduralTorus(size);
+    Row row;
+    double build = 1e30;
+    // Eye rays alone (the light casts no shadows), then with shadow rays: the difference is what
+    // the shadow rays cost.
+    for (int pass = 0; pass < 2; ++pass) {
+      Scene scene = benchScene(mesh, args, pass == 1);
+      row.triangles = scene.triangles.size();
+      renderer.setScene(scene);
+      const GpuScene& g = renderer.gpuScene();
+      build = std::min(build, g.bvh.stats.buildMs);
+      row.nodes = g.bvh.stats.nodes;
+      row.depth = g.bvh.stats.depth;
+      row.bytesPerTriangle =
+          static_cast<double>(g.triangles.size() * sizeof(gpu::Triangle) + g.normals.size() * sizeof(glm::vec4) +
+                              g.bvh.bytes()) /
+          static_cast<double>(row.triangles);
+      // One counted render (ray counts; builds the pipelines), one warm-up, then the timed runs.
+      TimedRender t = timeRender(renderer, scene, scene.render, options, 1, 1);
+      auto [gpuMs, cpuMs] = timeRenders(renderer, scene, options, args.runs);
+      if (pass == 0) {
+        row.primaryMs = gpuMs;
+        row.primaryCpuMs = cpuMs;
+        row.eyeRays = t.stats.eye;
+      } else {
+        row.shadowMs = std::max(1e-3, gpuMs - row.primaryMs);
+        row.shadowCpuMs = std::max(1e-3, cpuMs - row.primaryCpuMs);
+        row.shadowRays = t.stats.shadow;
+#ifdef VKRAY_HAVE_EMBREE
+        if (embree) runEmbree(g, scene, args, row);
+#endif
+      }
+    }
+    row.buildMs = build;
+    rows.push_back(row);
+    std::printf("%zu triangles: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.triangles, row.buildMs,
+                row.primaryMrays(), row.shadowMrays());
+    if (embree) {
+      std::printf(" | embree: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.embreeBuildMs,
+                  row.embreePrimaryMrays(), row.embreeShadowMrays());
+    }
+    std::printf("\n");
+    std::fflush(stdout);
+  }
+
+  std::printf("\n%10s %9s %9s %6s %8s %9s %9s %9s %9s %9s", "triangles", "build ms", "nodes", "depth", "B/tri",
+              "eye ms", "eye cpu", "eye Mr/s", "shd Mr/s", "rays");
+  if (embree) std::printf(" | %9s %8s %9s %9s %8s %8s", "emb build", "emb B/t", "emb eye", "emb shd", "eye x", "build x");
+  std::printf("\n");
+  for (const Row& r : rows) {
+    std::printf("%10zu %9.1f %9zu %6d %8.1f %9.2f %9.1f %9.2f %9.2f %9llu", r.triangles, r.buildMs, r.nodes, r.depth,
+                r.bytesPerTriangle, r.primaryMs, r.primaryCpuMs, r.primaryMrays(), r.shadowMrays(),
+                static_cast<unsigned long long>(r.eyeRays + r.shadowRays));
+    if (embree) {
+      std::printf(" | %9.1f %8.1f %9.2f %9.2f %8.2f %8.2f", r.embreeBuildMs, r.embreeBytesPerTriangle,
+                  r.embreePrimaryMrays(), r.embreeShadowMrays(),
+                  r.embreePrimaryMrays() > 0 ? r.primaryMrays() / r.embreePrimaryMrays() : 0.0,
+                  r.embreeBuildMs > 0 ? r.buildMs / r.embreeBuildMs : 0.0);
+    }
+    std::printf("\n");
+  }
+  if (rows.size() >= 2 && rows.front().primaryMs > 0) {
+    const Row& a = rows.front();
+    const Row& b = rows.back();
+    std::printf("eye-ray time %zu -> %zu triangles: x%.2f (%.0fx the triangles)\n", a.triangles, b.triangles,
+                b.primaryMs / a.primaryMs, static_cast<double>(b.triangles) / a.triangles);
+  }
+  if (embree) {
+    std::printf("columns 'eye x' and 'build x': vkray eye-ray throughput / Embree's, vkray build time / Embree's\n");
+    for (const Row& r : rows) {
+      if (r.embreeHits > 0 && r.shadowRays > 0) {
+        std::printf("  %zu triangles: shadow rays vkray %llu, embree %llu (same hits, offsets differ slightly)\n",
+                    r.triangles, static_cast<unsigned long long>(r.shadowRays),
+                    static_cast<unsigned long long>(r.embreeShadowRays));
+      }
+    }
+  }
+
+  if (!args.csv.empty()) {
+    std::ofstream out(args.csv);
+    if (!out) throw InputError(args.csv.string(), "cannot open for writing");
+    out << "triangles,build_ms,nodes,depth,bytes_per_triangle,eye_ms,eye_cpu_ms,shadow_cpu_ms,eye_mrays,shadow_mrays,"
+           "embree_build_ms,"
+           "embree_bytes_per_triangle,embree_eye_mrays,embree_shadow_mrays\n";
+    for (const Row& r : rows) {
+      out << r.triangles << ',' << r.buildMs << ',' << r.nodes << ',' << r.depth << ',' << r.bytesPerTriangle << ','
+          << r.primaryMs << ',' << r.primaryCpuMs << ',' << r.shadowCpuMs << ',' << r.primaryMrays() << ',' << r.shadowMrays() << ',' << r.embreeBuildMs << ','
+          << r.embreeBytesPerTriangle << ',' << r.embreePrimaryMrays() << ',' << r.embreeShadowMrays() << '\n';
+    }
+    std::printf("wrote %s\n", args.csv.string().c_str());
+  }
+  return 0;
+}
+
+} // namespace vkray

@@ -1,0 +1,70 @@
+// Triangle meshes from files: Wavefront OBJ (+MTL) through tinyobjloader and glTF 2.0 (.gltf/.glb)
+// through tinygltf, validated, transformed and appended to a Scene. docs/scene-format.md ("Meshes")
+// documents the format, the material mapping and every repair.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "scene/scene.h"
+
+namespace vkray {
+
+// A mesh file's contents in the file's own frame (glTF node transforms already applied), indexed.
+struct MeshData {
+  static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
+
+  std::vector<glm::dvec3> positions;
+  std::vector<glm::dvec3> normals;                      // may be empty
+  std::vector<std::array<std::uint32_t, 3>> faces;      // indices into positions
+  std::vector<std::array<std::uint32_t, 3>> faceNormals; // into normals (kNone: none); empty or one per face
+  std::vector<std::uint32_t> faceMaterials;             // into materials, kNone: the default
+  std::vector<Material> materials;                      // named "file: material"
+  std::optional<Camera> camera;                         // the first camera, when asked for
+  std::vector<PointLight> lights;                       // when asked for
+};
+
+enum class MeshNormals {
+  Auto,   // the file's vertex normals where a face has them, else flat
+  Flat,   // geometric normals only
+  Smooth, // area-weighted vertex normals computed over shared vertices (the file's are ignored)
+};
+
+// What a `mesh` object asks for.
+struct MeshRequest {
+  std::filesystem::path file;           // resolved (relative paths already joined to the scene's dir)
+  std::string shownAs;                  // the file as messages name it
+  glm::dmat4 worldFromMesh{1.0};        // affine
+  std::optional<std::uint32_t> material; // override: every triangle gets this scene material
+  MeshNormals normals = MeshNormals::Auto;
+  bool importCamera = false;
+  bool importLights = false;
+  double lightScale = 1.0; // imported light colours are multiplied by this
+  // The scene material of faces the file gives none (called once, when first needed). Unset:
+  // appendMesh adds a default grey material itself.
+  std::function<std::uint32_t()> defaultMaterial;
+};
+
+// Readers: the file into MeshData (file frame), or InputError naming the file and the problem.
+MeshData readObj(const MeshRequest& request);
+MeshData readGltf(const MeshRequest& request);
+
+// Reads the file (by extension: .obj, .gltf, .glb), transforms it and appends its triangles,
+// materials, camera and lights to the scene; records a MeshInfo. Degenerate triangles (zero area
+// after the transform, in double) are dropped and counted. Returns the imported camera, if any.
+std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene);
+
+// Appends already-read mesh data (used by importMesh, the benchmark's procedural meshes and tests).
+std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& request, Scene& scene);
+
+// worldFromMesh from translate / rotate (degrees about x, then y, then z) / scale: T * Rz * Ry * Rx * S.
+glm::dmat4 composeTransform(const glm::dvec3& translate, const glm::dvec3& rotateDegrees, const glm::dvec3& scale);
+
+} // namespace vkray

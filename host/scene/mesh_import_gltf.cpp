@@ -1,0 +1,440 @@
+// glTF 2.0 (.gltf with external or embedded buffers, .glb) through tinygltf. tinygltf parses the
+// JSON and loads the buffers; everything read out of them (accessor ranges, strides, indices,
+// node references) is checked here before it is touched, so a broken file is an error, never a
+// read out of bounds.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+#include <tiny_gltf.h>
+
+#include "scene/mesh_import.h"
+#include "util/error.h"
+
+namespace vkray {
+
+namespace {
+
+using glm::dvec3;
+
+// Extensions a file may require that vkray honours or that do not change what it renders
+// (textures are not used, so a texture transform changes nothing).
+const char* const kSupportedRequired[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
+                                          "KHR_materials_emissive_strength", "KHR_texture_transform"};
+
+// Images are not decoded: vkray uses the material factors, not textures.
+bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+  return true;
+}
+
+std::string firstLine(const std::string& s) {
+  std::string line = s.substr(0, s.find('\n'));
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ')) line.pop_back();
+  return line;
+}
+
+const char* componentName(int type) {
+  switch (type) {
+  case TINYGLTF_COMPONENT_TYPE_BYTE:
+    return "BYTE";
+  case TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE:
+    return "UNSIGNED_BYTE";
+  case TINYGLTF_COMPONENT_TYPE_SHORT:
+    return "SHORT";
+  case TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT:
+    return "UNSIGNED_SHORT";
+  case TINYGLTF_COMPONENT_TYPE_INT:
+    return "INT";
+  case TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT:
+    return "UNSIGNED_INT";
+  case TINYGLTF_COMPONENT_TYPE_FLOAT:
+    return "FLOAT";
+  case TINYGLTF_COMPONENT_TYPE_DOUBLE:
+    return "DOUBLE";
+  default:
+    return "unknown";
+  }
+}
+
+// A checked window onto an accessor's elements.
+struct AccessorView {
+  const unsigned char* data = nullptr;
+  std::size_t stride = 0;
+  std::size_t count = 0;
+  int componentType = 0;
+
+  dvec3 vec3(std::size_t i) const {
+    float f[3];
+    std::memcpy(f, data + i * stride, sizeof f); // glTF data need not be aligned
+    return dvec3(f[0], f[1], f[2]);
+  }
+  std::uint32_t index(std::size_t i) const {
+    const unsigned char* p = data + i * stride;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) return *p;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+      std::uint16_t v;
+      std::memcpy(&v, p, sizeof v);
+      return v;
+    }
+    std::uint32_t v;
+    std::memcpy(&v, p, sizeof v);
+    return v;
+  }
+};
+
+class GltfReader {
+public:
+  GltfReader(const MeshRequest& request, const tinygltf::Model& model) : request_(request), model_(model) {}
+
+  MeshData read() {
+    for (const auto& ext : model_.extensionsRequired) {
+      if (std::find(std::begin(kSupportedRequired), std::end(kSupportedRequired), ext) == std::end(kSupportedRequired)) {
+        fail("requires extension '" + ext + "', which vkray does not support");
+      }
+    }
+    for (std::size_t i = 0; i < model_.materials.size(); ++i) data_.materials.push_back(mapMaterial(i));
+
+    // The default scene, else the first; a file without scenes shows every root node.
+    std::vector<int> roots;
+    int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : (model_.scenes.empty() ? -1 : 0);
+    if (sceneIndex >= 0) {
+      if (static_cast<std::size_t>(sceneIndex) >= model_.scenes.size()) fail("scene " + std::to_string(sceneIndex) + " does not exist");
+      roots = model_.scenes[static_cast<std::size_t>(sceneIndex)].nodes;
+    } else {
+      std::vector<bool> isChild(model_.nodes.size(), false);
+      for (const auto& n : model_.nodes) {
+        for (int c : n.children) {
+          if (c >= 0 && static_cast<std::size_t>(c) < isChild.size()) isChild[static_cast<std::size_t>(c)] = true;
+        }
+      }
+      for (std::size_t i = 0; i < isChild.size(); ++i) {
+        if (!isChild[i]) roots.push_back(static_cast<int>(i));
+      }
+    }
+    visited_.assign(model_.nodes.size(), false);
+    for (int root : roots) visit(root, glm::dmat4(1.0), "scenes[" + std::to_string(sceneIndex) + "].nodes");
+
+    if (request_.importCamera && !data_.camera) fail("import_camera: the file's scene has no camera");
+    if (request_.importLights && data_.lights.empty()) fail("import_lights: the file's scene has no lights");
+    return std::move(data_);
+  }
+
+private:
+  [[noreturn]] void fail(const std::string& problem) const { throw InputError(request_.shownAs, problem); }
+
+  // Depth-first over the node tree; every node at most once (glTF requires a tree, and a cycle
+  // must not hang the reader).
+  void visit(int index, const glm::dmat4& parent, const std::string& from) {
+    if (index < 0 || static_cast<std::size_t>(index) >= model_.nodes.size()) {
+      fail(from + " refers to node " + std::to_string(index) + ", which does not exist");
+    }
+    auto i = static_cast<std::size_t>(index);
+    if (visited_[i]) fail("node " + std::to_string(index) + " is reached twice (a cycle or a shared child)");
+    visited_[i] = true;
+    const tinygltf::Node& node = model_.nodes[i];
+    const std::string where = "nodes[" + std::to_string(index) + "]";
+    glm::dmat4 world = parent * localMatrix(node, where);
+    if (node.mesh >= 0) {
+      if (static_cast<std::size_t>(node.mesh) >= model_.meshes.size()) fail(where + ".mesh: no mesh " + std::to_string(node.mesh));
+      readMesh(static_cast<std::size_t>(node.mesh), world);
+    }
+    if (request_.importCamera && node.camera >= 0 && !data_.camera) readCamera(node, world, where);
+    if (request_.importLights) readLight(node, world, where);
+    for (int child : node.children) visit(child, world, where + ".children");
+  }
+
+  glm::dmat4 localMatrix(const tinygltf::Node& node, const std::string& where) const {
+    glm::dmat4 m(1.0);
+    if (!node.matrix.empty()) {
+      if (node.matrix.size() != 16) fail(where + ".matrix must have 16 numbers");
+      for (int c = 0; c < 4; ++c) {
+        for (int r = 0; r < 4; ++r) m[c][r] = node.matrix[static_cast<std::size_t>(c * 4 + r)]; // column-major
+      }
+      if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0) {
+        fail(where + ".matrix is not affine (its last row must be 0 0 0 1)");
+      }
+    } else {
+      if (!node.translation.empty()) {
+        if (node.translation.size() != 3) fail(where + ".translation must have 3 numbers");
+        m = glm::translate(m, dvec3(node.translation[0], node.translation[1], node.translation[2]));
+      }
+      if (!node.rotation.empty()) {
+        if (node.rotation.size() != 4) fail(where + ".rotation must have 4 numbers");
+        glm::dquat q(node.rotation[3], node.rotation[0], node.rotation[1], node.rotation[2]); // glTF: x y z w
+        double len = glm::length(q);
+        if (!(len > 0.0)) fail(where + ".rotation is not a unit quaternion");
+        m = m * glm::mat4_cast(q / len);
+      }
+      if (!node.scale.empty()) {
+        if (node.scale.size() != 3) fail(where + ".scale must have 3 numbers");
+        m = glm::scale(m, dvec3(node.scale[0], node.scale[1], node.scale[2]));
+      }
+    }
+    for (int c = 0; c < 4; ++c) {
+      for (int r = 0; r < 4; ++r) {
+        if (!std::isfinite(m[c][r])) fail(where + " has a non-finite transform");
+      }
+    }
+    return m;
+  }
+
+  AccessorView view(int accessorIndex, const std::string& what, int type, std::initializer_list<int> components) const {
+    if (accessorIndex < 0 || static_cast<std::size_t>(accessorIndex) >= model_.accessors.size()) {
+      fail(what + " refers to accessor " + std::to_string(accessorIndex) + ", which does not exist");
+    }
+    const tinygltf::Accessor& a = model_.accessors[static_cast<std::size_t>(accessorIndex)];
+    const std::string name = "accessors[" + std::to_string(accessorIndex) + "] (" + what + ")";
+    if (a.sparse.isSparse) fail(name + " is sparse, which vkray does not support");
+    if (a.type != type) fail(name + " has the wrong type for " + what);
+    if (std::find(components.begin(), components.end(), a.componentType) == components.end()) {
+      fail(name + " has component type " + componentName(a.componentType) + ", which " + what + " cannot have");
+    }
+    if (a.bufferView < 0) fail(name + " has no bufferView (no data)");
+    if (static_cast<std::size_t>(a.bufferView) >= model_.bufferViews.size()) {
+      fail(name + " refers to bufferView " + std::to_string(a.bufferView) + ", which does not exist");
+    }
+    const tinygltf::BufferView& bv = model_.bufferViews[static_cast<std::size_t>(a.bufferView)];
+    const std::string bvName = "bufferViews[" + std::to_string(a.bufferView) + "]";
+    if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= model_.buffers.size()) {
+      fail(bvName + " refers to buffer " + std::to_string(bv.buffer) + ", which does not exist");
+    }
+    const tinygltf::Buffer& buffer = model_.buffers[static_cast<std::size_t>(bv.buffer)];
+    if (bv.byteOffset > buffer.data.size() || bv.byteLength > buffer.data.size() - bv.byteOffset) {
+      fail(bvName + " reaches past the end of buffer " + std::to_string(bv.buffer) + " (" +
+           std::to_string(buffer.data.size()) + " bytes)");
+    }
+    std::size_t element = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType))) *
+                          static_cast<std::size_t>(tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type)));
+    std::size_t stride = bv.byteStride ? bv.byteStride : element;
+    if (stride < element) fail(bvName + ".byteStride " + std::to_string(bv.byteStride) + " is smaller than an element");
+    AccessorView v;
+    v.stride = stride;
+    v.count = a.count;
+    v.componentType = a.componentType;
+    if (a.count > 0) {
+      // Overflow-safe: (count - 1) * stride + element <= byteLength - byteOffset.
+      if (a.byteOffset > bv.byteLength || element > bv.byteLength - a.byteOffset ||
+          (a.count - 1) > (bv.byteLength - a.byteOffset - element) / stride) {
+        fail(name + ": " + std::to_string(a.count) + " elements do not fit " + bvName + " (" +
+             std::to_string(bv.byteLength) + " bytes)");
+      }
+      v.data = buffer.data.data() + bv.byteOffset + a.byteOffset;
+    }
+    return v;
+  }
+
+  void readMesh(std::size_t meshIndex, const glm::dmat4& world) {
+    const tinygltf::Mesh& mesh = model_.meshes[meshIndex];
+    const glm::dmat3 normalMatrix = glm::transpose(glm::inverse(glm::dmat3(world)));
+    for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
+      const tinygltf::Primitive& prim = mesh.primitives[p];
+      const std::string where = "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]";
+      if (prim.extensions.count("KHR_draco_mesh_compression")) {
+        fail(where + " is Draco-compressed (KHR_draco_mesh_compression), which vkray does not support");
+      }
+      // Points and lines are not surfaces: nothing for a ray to hit.
+      if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
+          prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
+        if (prim.mode >= TINYGLTF_MODE_POINTS && prim.mode <= TINYGLTF_MODE_LINE_STRIP) continue;
+        fail(where + ".mode " + std::to_string(prim.mode) + " is not a glTF primitive mode");
+      }
+      auto pos = prim.attributes.find("POSITION");
+      if (pos == prim.attributes.end()) fail(where + " has no POSITION attribute");
+      AccessorView positions = view(pos->second, where + " POSITION", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+      std::optional<AccessorView> normals;
+      if (auto nrm = prim.attributes.find("NORMAL"); nrm != prim.attributes.end()) {
+        normals = view(nrm->second, where + " NORMAL", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+        if (normals->count != positions.count) {
+          fail(where + " has " + std::to_string(normals->count) + " normals for " + std::to_string(positions.count) +
+               " positions");
+        }
+      }
+      auto base = static_cast<std::uint32_t>(data_.positions.size());
+      if (data_.positions.size() + positions.count > 0xFFFFFFF0u) fail("too many vertices");
+      for (std::size_t i = 0; i < positions.count; ++i) {
+        dvec3 v = positions.vec3(i);
+        if (!(std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z))) {
+          fail(where + " POSITION " + std::to_string(i) + " is not finite (NaN or Inf)");
+        }
+        data_.positions.push_back(dvec3(world * glm::dvec4(v, 1.0)));
+        // Non-finite normals are kept: the face falls back to flat shading (mesh_import.cpp).
+        if (normals) data_.normals.push_back(normalMatrix * normals->vec3(i));
+      }
+
+      std::vector<std::uint32_t> indices;
+      if (prim.indices >= 0) {
+        AccessorView idx = view(prim.indices, where + " indices", TINYGLTF_TYPE_SCALAR,
+                                {TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                 TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT});
+        indices.resize(idx.count);
+        for (std::size_t i = 0; i < idx.count; ++i) {
+          indices[i] = idx.index(i);
+          if (indices[i] >= positions.count) {
+            fail(where + " index " + std::to_string(i) + " is " + std::to_string(indices[i]) + ", but there are " +
+                 std::to_string(positions.count) + " vertices");
+          }
+        }
+      } else {
+        indices.resize(positions.count);
+        for (std::size_t i = 0; i < indices.size(); ++i) indices[i] = static_cast<std::uint32_t>(i);
+      }
+
+      std::uint32_t material = MeshData::kNone;
+      if (prim.material >= 0) {
+        if (static_cast<std::size_t>(prim.material) >= model_.materials.size()) {
+          fail(where + ".material " + std::to_string(prim.material) + " does not exist");
+        }
+        material = static_cast<std::uint32_t>(prim.material);
+      }
+      auto addFace = [&](std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+        data_.faces.push_back({base + a, base + b, base + c});
+        if (normals) {
+          data_.faceNormals.push_back({base + a, base + b, base + c});
+        } else {
+          data_.faceNormals.push_back({MeshData::kNone, MeshData::kNone, MeshData::kNone});
+        }
+        data_.faceMaterials.push_back(material);
+      };
+      if (prim.mode == TINYGLTF_MODE_TRIANGLES) {
+        if (indices.size() % 3 != 0) {
+          fail(where + " has " + std::to_string(indices.size()) + " vertices, not a multiple of 3");
+        }
+        for (std::size_t i = 0; i + 2 < indices.size(); i += 3) addFace(indices[i], indices[i + 1], indices[i + 2]);
+      } else if (prim.mode == TINYGLTF_MODE_TRIANGLE_STRIP) {
+        // Every other triangle of a strip is wound the other way round; swap to keep the winding.
+        for (std::size_t i = 0; i + 2 < indices.size(); ++i) {
+          if (i % 2 == 0)
+            addFace(indices[i], indices[i + 1], indices[i + 2]);
+          else
+            addFace(indices[i + 1], indices[i], indices[i + 2]);
+        }
+      } else {
+        for (std::size_t i = 1; i + 1 < indices.size(); ++i) addFace(indices[0], indices[i], indices[i + 1]);
+      }
+    }
+  }
+
+  void readCamera(const tinygltf::Node& node, const glm::dmat4& world, const std::string& where) {
+    if (static_cast<std::size_t>(node.camera) >= model_.cameras.size()) {
+      fail(where + ".camera: no camera " + std::to_string(node.camera));
+    }
+    const tinygltf::Camera& cam = model_.cameras[static_cast<std::size_t>(node.camera)];
+    const std::string name = "cameras[" + std::to_string(node.camera) + "]";
+    if (cam.type != "perspective") fail(name + " is " + cam.type + "; vkray has only perspective cameras");
+    double fov = glm::degrees(cam.perspective.yfov);
+    if (!(fov > 0.0 && fov < 180.0)) fail(name + ".perspective.yfov must be in (0, pi)");
+    // A glTF camera looks down its local -z with +y up.
+    glm::dmat3 linear(world);
+    Camera c;
+    c.position = dvec3(world * glm::dvec4(0, 0, 0, 1));
+    dvec3 forward = linear * dvec3(0, 0, -1);
+    dvec3 up = linear * dvec3(0, 1, 0);
+    if (!(glm::length(forward) > 0.0) || !(glm::length(up) > 0.0)) fail(name + ": its node's transform is singular");
+    c.lookAt = c.position + forward;
+    c.up = up;
+    c.fovY = fov;
+    data_.camera = c;
+  }
+
+  void readLight(const tinygltf::Node& node, const glm::dmat4& world, const std::string& where) {
+    auto ext = node.extensions.find("KHR_lights_punctual");
+    if (ext == node.extensions.end()) return;
+    const tinygltf::Value& v = ext->second;
+    if (!v.IsObject() || !v.Has("light") || !v.Get("light").IsNumber()) {
+      fail(where + ".extensions.KHR_lights_punctual needs a light index");
+    }
+    int index = v.Get("light").GetNumberAsInt();
+    if (index < 0 || static_cast<std::size_t>(index) >= model_.lights.size()) {
+      fail(where + " refers to light " + std::to_string(index) + ", which does not exist");
+    }
+    const tinygltf::Light& light = model_.lights[static_cast<std::size_t>(index)];
+    const std::string name = "KHR_lights_punctual light " + std::to_string(index) +
+                             (light.name.empty() ? std::string() : " '" + light.name + "'");
+    // A spot light becomes a point light (its cone is ignored); a directional light has no
+    // position and vkray has no equivalent.
+    if (light.type != "point" && light.type != "spot") {
+      fail(name + " is " + light.type + "; vkray has only point lights (set import_lights to false to leave it out)");
+    }
+    PointLight p;
+    p.position = dvec3(world * glm::dvec4(0, 0, 0, 1));
+    dvec3 color(1.0);
+    if (light.color.size() == 3) color = dvec3(light.color[0], light.color[1], light.color[2]);
+    p.color = color * light.intensity;
+    if (!(std::isfinite(p.color.x) && std::isfinite(p.color.y) && std::isfinite(p.color.z)) ||
+        glm::any(glm::lessThan(p.color, dvec3(0.0)))) {
+      fail(name + " has a negative or non-finite colour or intensity");
+    }
+    data_.lights.push_back(p);
+  }
+
+  double extensionNumber(const tinygltf::Material& m, const char* ext, const char* key, double fallback) const {
+    auto it = m.extensions.find(ext);
+    if (it == m.extensions.end() || !it->second.IsObject() || !it->second.Has(key)) return fallback;
+    const tinygltf::Value& v = it->second.Get(key);
+    return v.IsNumber() ? v.GetNumberAsDouble() : fallback;
+  }
+
+  // glTF metallic-roughness -> Phong, as docs/scene-format.md states. With m = metallic and
+  // r = roughness: smooth metals become mirrors (reflection m (1 - r)^2), the rest is diffuse
+  // (0.8 (1 - reflection)), the highlight fades with roughness ((1 - r)^2 (0.25 + 0.75 m)) and
+  // narrows with smoothness (Phong exponent 2 / alpha^2 - 2 with alpha = r^2, the usual
+  // Beckmann-Phong correspondence, Walter et al. 2007). Transmission comes from
+  // KHR_materials_transmission, or from 1 - alpha for alphaMode BLEND (then without refraction).
+  Material mapMaterial(std::size_t index) const {
+    const tinygltf::Material& g = model_.materials[index];
+    const auto& pbr = g.pbrMetallicRoughness;
+    auto clamp01 = [](double v) { return std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0; };
+    Material m;
+    m.name = request_.shownAs + ": " + (g.name.empty() ? "materials[" + std::to_string(index) + "]" : g.name);
+    dvec3 base(1.0);
+    double alpha = 1.0;
+    if (pbr.baseColorFactor.size() == 4) {
+      base = dvec3(clamp01(pbr.baseColorFactor[0]), clamp01(pbr.baseColorFactor[1]), clamp01(pbr.baseColorFactor[2]));
+      alpha = clamp01(pbr.baseColorFactor[3]);
+    }
+    double metal = clamp01(pbr.metallicFactor);
+    double rough = clamp01(pbr.roughnessFactor);
+    double smooth = (1.0 - rough) * (1.0 - rough);
+    m.color = base;
+    m.ambient = 0.1;
+    m.reflection = metal * smooth;
+    m.specular = smooth * (0.25 + 0.75 * metal);
+    double a = std::max(rough * rough, 0.03);
+    m.shininess = std::clamp(2.0 / (a * a) - 2.0, 1.0, 1000.0);
+    m.transmission = clamp01(extensionNumber(g, "KHR_materials_transmission", "transmissionFactor", 0.0));
+    m.ior = extensionNumber(g, "KHR_materials_ior", "ior", 1.5);
+    if (g.alphaMode == "BLEND" && 1.0 - alpha > m.transmission) {
+      m.transmission = 1.0 - alpha;
+      if (!g.extensions.count("KHR_materials_ior")) m.ior = 1.0;
+    }
+    if (!(m.ior >= 0.01 && m.ior <= 100.0)) m.ior = 1.5;
+    m.reflection = std::min(m.reflection, 1.0 - m.transmission);
+    m.diffuse = 0.8 * (1.0 - m.reflection - m.transmission);
+    return m;
+  }
+
+  const MeshRequest& request_;
+  const tinygltf::Model& model_;
+  MeshData data_;
+  std::vector<bool> visited_;
+};
+
+} // namespace
+
+MeshData readGltf(const MeshRequest& request) {
+  tinygltf::TinyGLTF loader;
+  loader.SetImageLoader(skipImage, nullptr);
+  tinygltf::Model model;
+  std::string err;
+  std::string warn;
+  std::string ext = request.file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  bool ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model, &err, &warn, request.file.string())
+                          : loader.LoadASCIIFromFile(&model, &err, &warn, request.file.string());
+  if (!ok) throw InputError(request.shownAs, "not a valid glTF file: " + firstLine(err.empty() ? warn : err));
+  return GltfReader(request, model).read();
+}
+
+} // namespace vkray

@@ -1,0 +1,181 @@
+// Wavefront OBJ (+MTL) through tinyobjloader (double-precision build). tinyobjloader only warns
+// about out-of-range indices, and its own triangulation reads vertices through them unchecked,
+// so faces are read untriangulated, every index is checked here, and polygons are split here.
+#include <algorithm>
+#include <cmath>
+#include <fstream>
+#include <set>
+
+#include <tiny_obj_loader.h>
+
+#include "scene/mesh_import.h"
+#include "util/error.h"
+
+namespace vkray {
+
+namespace {
+
+using glm::dvec3;
+
+// The file-based MTL reader, remembering which mtllib files it could not find.
+class TrackingMaterialReader : public tinyobj::MaterialFileReader {
+public:
+  explicit TrackingMaterialReader(const std::string& dir) : tinyobj::MaterialFileReader(dir) {}
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
+                  std::map<std::string, int>* ids, std::string* warn, std::string* err) override {
+    bool ok = tinyobj::MaterialFileReader::operator()(name, materials, ids, warn, err);
+    if (!ok) missing.push_back(name);
+    return ok;
+  }
+  std::vector<std::string> missing;
+};
+
+std::string firstLine(const std::string& s) {
+  std::string line = s.substr(0, s.find('\n'));
+  while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '.')) line.pop_back();
+  return line;
+}
+
+double finiteOr(double v, double fallback) {
+  return std::isfinite(v) ? v : fallback;
+}
+
+// MTL -> Phong, as docs/scene-format.md states: Kd is the colour (diffuse 1), the largest Ks
+// component the highlight, Ns the exponent; illum 3, 5, 6, 7 (ray-traced reflection) make Ks a
+// mirror too; d < 1 (dissolve) becomes transmission 1 - d with Ni as the index of refraction.
+Material mapMtl(const tinyobj::material_t& mtl, const std::string& file) {
+  Material m;
+  m.name = file + ": " + mtl.name;
+  m.color = glm::max(dvec3(finiteOr(mtl.diffuse[0], 0.8), finiteOr(mtl.diffuse[1], 0.8), finiteOr(mtl.diffuse[2], 0.8)),
+                     dvec3(0.0));
+  m.ambient = 0.1;
+  m.diffuse = 1.0;
+  double ks = std::max({finiteOr(mtl.specular[0], 0.0), finiteOr(mtl.specular[1], 0.0), finiteOr(mtl.specular[2], 0.0)});
+  m.specular = std::clamp(ks, 0.0, 1.0);
+  m.shininess = std::clamp(finiteOr(mtl.shininess, 40.0), 0.0, 1e6);
+  double d = std::clamp(finiteOr(mtl.dissolve, 1.0), 0.0, 1.0);
+  m.transmission = 1.0 - d;
+  double ior = finiteOr(mtl.ior, 1.0);
+  m.ior = ior >= 0.01 && ior <= 100.0 ? ior : 1.0;
+  bool mirror = mtl.illum == 3 || mtl.illum == 5 || mtl.illum == 6 || mtl.illum == 7;
+  m.reflection = mirror ? std::min(m.specular, 1.0 - m.transmission) : 0.0;
+  return m;
+}
+
+} // namespace
+
+MeshData readObj(const MeshRequest& request) {
+  const std::string& where = request.shownAs;
+  std::ifstream in(request.file, std::ios::binary);
+  if (!in) throw InputError(where, "cannot open for reading");
+  tinyobj::attrib_t attrib;
+  std::vector<tinyobj::shape_t> shapes;
+  std::vector<tinyobj::material_t> materials;
+  std::string warn;
+  std::string err;
+  std::string dir = request.file.parent_path().string();
+  TrackingMaterialReader mtlReader(dir.empty() ? std::string("./") : dir + "/");
+  bool ok = tinyobj::LoadObj(&attrib, &shapes, &materials, &warn, &err, &in, &mtlReader, /*triangulate=*/false,
+                             /*default_vcols_fallback=*/false);
+  if (!ok || !err.empty()) throw InputError(where, "not a valid OBJ file: " + firstLine(err));
+
+  if (!request.material) {
+    // The file's materials are used: a missing library or name would silently turn grey.
+    if (!mtlReader.missing.empty()) {
+      throw InputError(where, "material library '" + mtlReader.missing.front() +
+                                  "' not found (give the mesh a 'material' to ignore the file's materials)");
+    }
+    const std::string marker = "material [ '";
+    if (auto p = warn.find(marker); p != std::string::npos) {
+      auto q = warn.find('\'', p + marker.size());
+      throw InputError(where, "usemtl '" + warn.substr(p + marker.size(), q - p - marker.size()) +
+                                  "' is not in the material library (give the mesh a 'material' to ignore the "
+                                  "file's materials)");
+    }
+  }
+
+  MeshData data;
+  const std::size_t vertexCount = attrib.vertices.size() / 3;
+  const std::size_t normalCount = attrib.normals.size() / 3;
+  data.positions.resize(vertexCount);
+  for (std::size_t i = 0; i < vertexCount; ++i) {
+    data.positions[i] = dvec3(attrib.vertices[3 * i], attrib.vertices[3 * i + 1], attrib.vertices[3 * i + 2]);
+  }
+  data.normals.resize(normalCount);
+  for (std::size_t i = 0; i < normalCount; ++i) {
+    data.normals[i] = dvec3(attrib.normals[3 * i], attrib.normals[3 * i + 1], attrib.normals[3 * i + 2]);
+  }
+  bool anyNormals = false;
+  for (const auto& shape : shapes) {
+    for (const auto& idx : shape.mesh.indices) anyNormals = anyNormals || idx.normal_index >= 0;
+  }
+  for (const auto& mtl : materials) data.materials.push_back(mapMtl(mtl, where));
+
+  std::vector<bool> checkedVertex(vertexCount, false);
+  for (const auto& shape : shapes) {
+    const auto& mesh = shape.mesh;
+    const std::string shapeName = shape.name.empty() ? std::string("(unnamed)") : shape.name;
+    std::size_t offset = 0;
+    for (std::size_t f = 0; f < mesh.num_face_vertices.size(); ++f) {
+      std::size_t n = mesh.num_face_vertices[f];
+      auto context = [&] { return "object '" + shapeName + "', face " + std::to_string(f + 1) + ": "; };
+      // tinyobjloader counts face vertices in 8 bits: a larger face would desynchronise the lists.
+      if (offset + n > mesh.indices.size()) throw InputError(where, context() + "more than 255 vertices");
+      std::array<std::uint32_t, 3> fv{};
+      std::array<std::uint32_t, 3> fn{};
+      auto vertex = [&](std::size_t k) {
+        const tinyobj::index_t& idx = mesh.indices[offset + k];
+        if (idx.vertex_index < 0 || static_cast<std::size_t>(idx.vertex_index) >= vertexCount) {
+          throw InputError(where, context() + "vertex index out of range (resolves to " +
+                                      std::to_string(static_cast<long long>(idx.vertex_index) + 1) + "; the file has " +
+                                      std::to_string(vertexCount) + " vertices)");
+        }
+        auto v = static_cast<std::uint32_t>(idx.vertex_index);
+        if (!checkedVertex[v]) {
+          const dvec3& p = data.positions[v];
+          if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) {
+            throw InputError(where, "vertex " + std::to_string(v + 1) + " (v line " + std::to_string(v + 1) +
+                                        ") is not finite (NaN or Inf)");
+          }
+          checkedVertex[v] = true;
+        }
+        std::uint32_t nrm = MeshData::kNone;
+        if (idx.normal_index >= 0) {
+          if (static_cast<std::size_t>(idx.normal_index) >= normalCount) {
+            throw InputError(where, context() + "normal index out of range (resolves to " +
+                                        std::to_string(static_cast<long long>(idx.normal_index) + 1) +
+                                        "; the file has " + std::to_string(normalCount) + " normals)");
+          }
+          nrm = static_cast<std::uint32_t>(idx.normal_index);
+        } else if (idx.normal_index != -1) {
+          throw InputError(where, context() + "normal index out of range");
+        }
+        return std::pair{v, nrm};
+      };
+      std::uint32_t material = MeshData::kNone;
+      if (f < mesh.material_ids.size() && mesh.material_ids[f] >= 0 &&
+          static_cast<std::size_t>(mesh.material_ids[f]) < materials.size()) {
+        material = static_cast<std::uint32_t>(mesh.material_ids[f]);
+      }
+      if (n >= 3) {
+        // A polygon becomes a fan from its first vertex (exact for convex polygons).
+        auto [v0, n0] = vertex(0);
+        for (std::size_t k = 1; k + 1 < n; ++k) {
+          auto [v1, n1] = vertex(k);
+          auto [v2, n2] = vertex(k + 1);
+          fv = {v0, v1, v2};
+          fn = {n0, n1, n2};
+          data.faces.push_back(fv);
+          if (anyNormals) data.faceNormals.push_back(fn);
+          data.faceMaterials.push_back(material);
+        }
+      }
+      offset += n;
+    }
+  }
+  if (request.importCamera) throw InputError(where, "OBJ files have no cameras (import_camera needs glTF)");
+  if (request.importLights) throw InputError(where, "OBJ files have no lights (import_lights needs glTF)");
+  return data;
+}
+
+} // namespace vkray
