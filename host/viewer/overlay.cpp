@@ -1,0 +1,257 @@
+// The Dear ImGui overlay (see overlay.h). The GLFW and Vulkan backends are Debian's libimgui-dev
+// sources, compiled into the viewer by CMakeLists.txt.
+#include "viewer/overlay.h"
+
+#include <array>
+#include <cinttypes>
+#include <cstdio>
+
+#include <imgui.h>
+#include <imgui_impl_glfw.h>
+#include <imgui_impl_vulkan.h>
+
+#include "scene/scene_limits.h"
+#include "util/error.h"
+
+namespace vkray {
+
+namespace {
+
+void checkOverlayResult(VkResult result) {
+  if (result < 0) throw DeviceError("drawing the overlay: " + vk::to_string(static_cast<vk::Result>(result)));
+}
+
+// A rate as "12.3 M".
+std::string mega(double v) {
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.2f M", v * 1e-6);
+  return buf;
+}
+
+template <typename E>
+bool comboEnum(const char* label, E& value, std::initializer_list<std::pair<E, const char*>> items) {
+  const char* current = "";
+  for (const auto& [v, name] : items)
+    if (v == value) current = name;
+  bool changed = false;
+  if (ImGui::BeginCombo(label, current)) {
+    for (const auto& [v, name] : items) {
+      if (ImGui::Selectable(name, v == value) && v != value) {
+        value = v;
+        changed = true;
+      }
+    }
+    ImGui::EndCombo();
+  }
+  return changed;
+}
+
+} // namespace
+
+Overlay::ImGuiScope::ImGuiScope() {
+  IMGUI_CHECKVERSION();
+  ImGui::CreateContext();
+  ImGui::GetIO().IniFilename = nullptr; // no imgui.ini left in the working directory
+  ImGui::StyleColorsDark();
+}
+
+Overlay::ImGuiScope::~ImGuiScope() {
+  ImGui::DestroyContext();
+}
+
+Overlay::GlfwBackendScope::GlfwBackendScope(const Window& window) {
+  // Chains to the window's own callbacks, installed before.
+  if (!ImGui_ImplGlfw_InitForVulkan(window.handle(), true)) throw Error("the overlay's GLFW backend failed to start");
+}
+
+Overlay::GlfwBackendScope::~GlfwBackendScope() {
+  ImGui_ImplGlfw_Shutdown();
+}
+
+Overlay::VulkanBackendScope::VulkanBackendScope(const vulkan::Context& context, vk::DescriptorPool pool,
+                                                vk::RenderPass pass, std::uint32_t imageCount) {
+  ImGui_ImplVulkan_InitInfo info{};
+  info.Instance = *context.instance();
+  info.PhysicalDevice = *context.physicalDevice();
+  info.Device = *context.device();
+  info.QueueFamily = context.queueFamily();
+  info.Queue = *context.queue();
+  info.DescriptorPool = pool;
+  info.Subpass = 0;
+  // ImageCount sizes the backend's ring of vertex buffers, one per frame in flight.
+  info.MinImageCount = imageCount;
+  info.ImageCount = imageCount;
+  info.MSAASamples = VK_SAMPLE_COUNT_1_BIT;
+  info.CheckVkResultFn = checkOverlayResult;
+  if (!ImGui_ImplVulkan_Init(&info, pass)) throw DeviceError("the overlay's Vulkan backend failed to start");
+  try {
+    context.submitAndWait("uploading the overlay's font",
+                          [](const vk::raii::CommandBuffer& cmd) { ImGui_ImplVulkan_CreateFontsTexture(*cmd); });
+  } catch (...) {
+    ImGui_ImplVulkan_Shutdown();
+    throw;
+  }
+  ImGui_ImplVulkan_DestroyFontUploadObjects();
+}
+
+Overlay::VulkanBackendScope::~VulkanBackendScope() {
+  ImGui_ImplVulkan_Shutdown();
+}
+
+Overlay::Overlay(const vulkan::Context& context, const Window& window, const Swapchain& swapchain) : context_(context) {
+  const auto& device = context.device();
+  vulkan::vulkanStep("creating the overlay's render pass", [&] {
+    // The blit has written the picture: keep it (LOAD) and draw on top, then hand it to present.
+    vk::AttachmentDescription color({}, swapchain.format(), vk::SampleCountFlagBits::e1, vk::AttachmentLoadOp::eLoad,
+                                    vk::AttachmentStoreOp::eStore, vk::AttachmentLoadOp::eDontCare,
+                                    vk::AttachmentStoreOp::eDontCare, vk::ImageLayout::eTransferDstOptimal,
+                                    vk::ImageLayout::ePresentSrcKHR);
+    vk::AttachmentReference ref(0, vk::ImageLayout::eColorAttachmentOptimal);
+    vk::SubpassDescription subpass({}, vk::PipelineBindPoint::eGraphics, {}, ref);
+    // The blit's writes must land before the attachment is loaded and drawn on.
+    vk::SubpassDependency afterBlit(
+        VK_SUBPASS_EXTERNAL, 0, vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eColorAttachmentOutput,
+        vk::AccessFlagBits::eTransferWrite,
+        vk::AccessFlagBits::eColorAttachmentRead | vk::AccessFlagBits::eColorAttachmentWrite);
+    renderPass_ = vk::raii::RenderPass(device, vk::RenderPassCreateInfo({}, color, subpass, afterBlit));
+    // The backend needs one combined image sampler (the font atlas).
+    vk::DescriptorPoolSize size(vk::DescriptorType::eCombinedImageSampler, 4);
+    pool_ = vk::raii::DescriptorPool(
+        device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 4, size));
+  });
+  attach(swapchain);
+  glfwBackend_ = std::make_unique<GlfwBackendScope>(window);
+  vulkanBackend_ = std::make_unique<VulkanBackendScope>(context, *pool_, *renderPass_, 2);
+}
+
+Overlay::~Overlay() = default;
+
+void Overlay::attach(const Swapchain& swapchain) {
+  framebuffers_.clear();
+  extent_ = swapchain.extent();
+  vulkan::vulkanStep("creating the overlay's framebuffers", [&] {
+    for (std::uint32_t i = 0; i < swapchain.imageCount(); ++i) {
+      vk::ImageView view = swapchain.view(i);
+      framebuffers_.emplace_back(context_.device(),
+                                 vk::FramebufferCreateInfo({}, *renderPass_, view, extent_.width, extent_.height, 1));
+    }
+  });
+}
+
+void Overlay::newFrame() {
+  ImGui_ImplVulkan_NewFrame();
+  ImGui_ImplGlfw_NewFrame();
+  ImGui::NewFrame();
+}
+
+bool Overlay::wantsMouse() const {
+  return visible && ImGui::GetIO().WantCaptureMouse;
+}
+
+bool Overlay::wantsKeyboard() const {
+  return visible && ImGui::GetIO().WantCaptureKeyboard;
+}
+
+OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
+  OverlayRequests req;
+  if (!visible) {
+    ImGui::Render();
+    return req;
+  }
+  ImGui::SetNextWindowPos(ImVec2(8, 8), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowSize(ImVec2(340, 0), ImGuiCond_FirstUseEver);
+  ImGui::SetNextWindowBgAlpha(0.8f);
+  ImGui::Begin("vkray", nullptr, ImGuiWindowFlags_NoFocusOnAppearing);
+
+  ImGui::TextUnformatted(m.scenePath.c_str());
+  ImGui::TextUnformatted(m.device.c_str());
+  ImGui::TextUnformatted(m.presentMode.c_str());
+  ImGui::Text("%ux%u, %u samples/pixel", m.renderSize.width, m.renderSize.height, m.samples);
+  if (!m.reloadError.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, ImVec4(1.0f, 0.45f, 0.4f, 1.0f));
+    ImGui::TextWrapped("reload failed, showing the last good scene: %s", m.reloadError.c_str());
+    ImGui::PopStyleColor();
+  }
+  if (!m.status.empty()) ImGui::TextWrapped("%s", m.status.c_str());
+
+  if (ImGui::CollapsingHeader("Timing", ImGuiTreeNodeFlags_DefaultOpen)) {
+    ImGui::Text("frame    %7.2f ms  (%.1f fps)", m.frameMs, m.frameMs > 0 ? 1000.0 / m.frameMs : 0.0);
+    ImGui::Text("trace    %7.2f ms  GPU", m.traceMs);
+    ImGui::Text("resolve  %7.2f ms  GPU", m.resolveMs);
+    ImGui::Text("blit     %7.2f ms  GPU", m.blitMs);
+    ImGui::Text("overlay  %7.2f ms  GPU", m.overlayMs);
+    ImGui::Text("host     %7.2f ms  CPU", m.hostMs);
+    if (settings.countStats) ImGui::Text("rays/s   %s", mega(m.raysPerSecond).c_str());
+  }
+  if (settings.countStats && ImGui::CollapsingHeader("Rays per frame", ImGuiTreeNodeFlags_DefaultOpen)) {
+    const RayStats& s = m.raysPerFrame;
+    auto row = [](const char* name, std::uint64_t v) { ImGui::Text("%-15s %12" PRIu64, name, v); };
+    row("eye", s.eye);
+    row("shadow", s.shadow);
+    row("reflection", s.reflection);
+    row("refraction", s.refraction);
+    row("total", s.total());
+    row("bailout saved", s.bailoutSaved);
+    row("stack overflow", s.stackOverflow);
+    row("deepest bounce", s.maxDepth);
+  }
+  if (ImGui::CollapsingHeader("Features")) {
+    for (const auto& line : m.features) ImGui::TextWrapped("%s", line.c_str());
+  }
+  if (ImGui::CollapsingHeader("Settings", ImGuiTreeNodeFlags_DefaultOpen)) {
+    RenderSettings& r = settings.render;
+    ImGui::SliderInt("max depth", &r.maxDepth, 0, 16);
+    float bailout = static_cast<float>(r.bailout);
+    if (ImGui::SliderFloat("bailout", &bailout, 0.0f, 0.5f, "%.4f", ImGuiSliderFlags_Logarithmic)) r.bailout = bailout;
+    ImGui::SliderInt("samples/frame", &settings.samplesPerFrame, 1, 16);
+    int maxSamples = static_cast<int>(settings.maxSamples);
+    if (ImGui::InputInt("max samples", &maxSamples, 64, 1024))
+      settings.maxSamples = static_cast<std::uint32_t>(std::clamp<long long>(maxSamples, 1, kMaxSpp * 16));
+    comboEnum("numerics", r.numerics, {{Numerics::Robust, "robust"}, {Numerics::Naive, "naive"}});
+    comboEnum("fresnel", r.fresnel, {{FresnelMode::Exact, "exact"}, {FresnelMode::Schlick, "schlick"}});
+    comboEnum("glass shadows", r.transmissiveShadows,
+              {{TransmissiveShadows::Attenuated, "attenuated"}, {TransmissiveShadows::Opaque, "opaque"}});
+    comboEnum("resolution", settings.renderScale, {{1.0, "100 %"}, {0.5, "50 %"}, {0.25, "25 %"}});
+    comboEnum("while moving", settings.motionScale, {{1.0, "100 %"}, {0.5, "50 %"}, {0.25, "25 %"}});
+    ImGui::Checkbox("shadows", &settings.effects.shadows);
+    ImGui::SameLine();
+    ImGui::Checkbox("reflection", &settings.effects.reflection);
+    ImGui::Checkbox("refraction", &settings.effects.refraction);
+    ImGui::SameLine();
+    ImGui::Checkbox("checker", &settings.effects.checker);
+    ImGui::Checkbox("count rays (costs ~20 %)", &settings.countStats);
+  }
+  if (ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {
+    bool fly = m.cameraMode == CameraMode::Fly;
+    if (ImGui::RadioButton("orbit", !fly) && fly) req.toggleFly = true;
+    ImGui::SameLine();
+    if (ImGui::RadioButton("fly (F)", fly) && !fly) req.toggleFly = true;
+    if (ImGui::Button("reset (R)")) req.resetCamera = true;
+    ImGui::SameLine();
+    if (ImGui::Button("save camera (C)")) req.saveCamera = true;
+    ImGui::SameLine();
+    if (ImGui::Button("screenshot (P)")) req.screenshot = true;
+    ImGui::TextWrapped("%s", m.cameraJson.c_str());
+  }
+  if (ImGui::CollapsingHeader("Controls")) {
+    ImGui::TextUnformatted("left drag: orbit (fly: look)\n"
+                           "right/middle drag, shift+left: pan\n"
+                           "wheel: zoom\n"
+                           "F / Tab: fly mode; W A S D, Q E: move, shift: fast\n"
+                           "R: reset camera   C: save camera JSON\n"
+                           "P / F12: screenshot   H / F1: overlay   Esc: quit");
+  }
+  ImGui::End();
+  ImGui::Render();
+  return req;
+}
+
+void Overlay::record(const vk::raii::CommandBuffer& cmd, std::uint32_t imageIndex) {
+  vk::RenderPassBeginInfo begin(*renderPass_, *framebuffers_[imageIndex], vk::Rect2D({0, 0}, extent_));
+  cmd.beginRenderPass(begin, vk::SubpassContents::eInline);
+  ImDrawData* data = ImGui::GetDrawData();
+  if (visible && data != nullptr && data->CmdListsCount > 0) ImGui_ImplVulkan_RenderDrawData(data, *cmd);
+  cmd.endRenderPass();
+}
+
+} // namespace vkray

@@ -1,0 +1,101 @@
+// The viewer's overlay (Dear ImGui): timings, ray statistics and the scene's Features, and controls for
+// the accuracy knobs and effects. Drawn in its own render pass on top of the blitted image.
+#pragma once
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include <vulkan/vulkan_raii.hpp>
+
+#include "render/renderer.h"
+#include "viewer/camera_controller.h"
+#include "viewer/swapchain.h"
+#include "viewer/view_settings.h"
+#include "viewer/window.h"
+#include "vk/context.h"
+
+namespace vkray {
+
+// What the overlay shows; the frame loop fills it.
+struct OverlayModel {
+  std::string scenePath;
+  std::string device;
+  std::string presentMode;
+  vk::Extent2D renderSize{0, 0};
+  std::uint32_t samples = 0; // accumulated per pixel
+  double frameMs = 0.0;      // wall time between frames
+  double hostMs = 0.0;       // CPU time of the frame loop outside waits for the GPU
+  double traceMs = 0.0;      // GPU times, per frame
+  double resolveMs = 0.0;
+  double blitMs = 0.0;
+  double overlayMs = 0.0;
+  double raysPerSecond = 0.0;
+  RayStats raysPerFrame; // averaged over the last statistics interval
+  std::vector<std::string> features;
+  std::string cameraJson;
+  CameraMode cameraMode = CameraMode::Orbit;
+  std::string reloadError; // the scene file's last load error (the last good scene is shown)
+  std::string status;      // the last action's result ("saved shot.png")
+};
+
+// What the user asked for through the overlay's buttons this frame.
+struct OverlayRequests {
+  bool resetCamera = false;
+  bool saveCamera = false;
+  bool screenshot = false;
+  bool toggleFly = false;
+};
+
+class Overlay {
+public:
+  Overlay(const vulkan::Context& context, const Window& window, const Swapchain& swapchain);
+  ~Overlay();
+  Overlay(const Overlay&) = delete;
+  Overlay& operator=(const Overlay&) = delete;
+
+  // Framebuffers for the swapchain's current images (after every re-creation); detach() drops them
+  // before the swapchain's image views go.
+  void attach(const Swapchain& swapchain);
+  void detach() { framebuffers_.clear(); }
+
+  // Starts the overlay's frame; then the input it claims is known.
+  void newFrame();
+  bool wantsMouse() const;
+  bool wantsKeyboard() const;
+  // Builds the panel (when visible); edits `settings` in place.
+  OverlayRequests build(const OverlayModel& model, ViewSettings& settings);
+  // Records the overlay's render pass on the swapchain image, which arrives in TRANSFER_DST_OPTIMAL
+  // (after the blit) and leaves in PRESENT_SRC_KHR.
+  void record(const vk::raii::CommandBuffer& cmd, std::uint32_t imageIndex);
+
+  bool visible = true;
+
+private:
+  // Each ImGui init step is undone by its own scope object, so a throw halfway leaks nothing.
+  struct ImGuiScope {
+    ImGuiScope();
+    ~ImGuiScope();
+  };
+  struct GlfwBackendScope {
+    explicit GlfwBackendScope(const Window& window);
+    ~GlfwBackendScope();
+  };
+  struct VulkanBackendScope {
+    VulkanBackendScope(const vulkan::Context& context, vk::DescriptorPool pool, vk::RenderPass pass,
+                       std::uint32_t imageCount);
+    ~VulkanBackendScope();
+  };
+
+  const vulkan::Context& context_;
+  vk::Extent2D extent_{0, 0};
+  // Vulkan objects first: the backend scopes below are destroyed before them.
+  vk::raii::RenderPass renderPass_{nullptr};
+  vk::raii::DescriptorPool pool_{nullptr};
+  std::vector<vk::raii::Framebuffer> framebuffers_;
+  ImGuiScope imgui_;
+  std::unique_ptr<GlfwBackendScope> glfwBackend_;
+  std::unique_ptr<VulkanBackendScope> vulkanBackend_;
+};
+
+} // namespace vkray

@@ -1,0 +1,156 @@
+// Resolve pass and blit to the swapchain (see presenter.h).
+#include "viewer/presenter.h"
+
+#include <array>
+
+#include "../../shaders/shared/resolve_types.h"
+#include "resolve_spv.h" // kResolveSpv: shaders/resolve.comp compiled at build time
+#include "util/error.h"
+
+namespace vkray {
+
+namespace {
+
+constexpr vk::Format kDisplayFormat = vk::Format::eR16G16B16A16Sfloat; // see resolve.comp
+constexpr vk::Format kSumsFormat = vk::Format::eR32G32B32A32Sfloat;    // the Renderer's vec4 per pixel
+const vk::ImageSubresourceRange kColorRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
+
+std::uint32_t deviceLocalType(const vulkan::Context& context, std::uint32_t typeBits) {
+  auto props = context.physicalDevice().getMemoryProperties();
+  for (auto want : {vk::MemoryPropertyFlags(vk::MemoryPropertyFlagBits::eDeviceLocal), vk::MemoryPropertyFlags()}) {
+    for (std::uint32_t i = 0; i < props.memoryTypeCount; ++i) {
+      if ((typeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) return i;
+    }
+  }
+  throw DeviceError("creating the viewer's images: no memory type fits");
+}
+
+} // namespace
+
+Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cache, bool encodeSrgb)
+    : context_(context) {
+  const auto& device = context.device();
+  vulkan::vulkanStep("creating the viewer's resolve pass", [&] {
+    std::array<vk::DescriptorSetLayoutBinding, 2> bindings{
+        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingSums, vk::DescriptorType::eCombinedImageSampler, 1,
+                                       vk::ShaderStageFlagBits::eCompute),
+        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingDisplay, vk::DescriptorType::eStorageImage, 1,
+                                       vk::ShaderStageFlagBits::eCompute)};
+    setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
+    vk::DescriptorSetLayout layouts[] = {*setLayout_};
+    pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, {}));
+    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 1),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 1)};
+    pool_ = vk::raii::DescriptorPool(
+        device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
+    vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*pool_, layouts));
+    set_ = std::move(sets.front());
+    // texelFetch ignores filtering; a sampler is still part of a combined image sampler.
+    sampler_ = vk::raii::Sampler(
+        device, vk::SamplerCreateInfo({}, vk::Filter::eNearest, vk::Filter::eNearest, vk::SamplerMipmapMode::eNearest));
+  });
+  vulkan::Specialization spec;
+  spec.set(gpu::kResolveSpecEncodeSrgb, encodeSrgb);
+  pipeline_ =
+      std::make_unique<vulkan::ComputePipeline>(context, std::span<const std::uint32_t>(kResolveSpv), *pipelineLayout_,
+                                                spec, cache ? &cache->cache() : nullptr, "resolve");
+}
+
+Presenter::OwnedImage Presenter::makeImage(vk::Format format, vk::ImageUsageFlags usage, vk::Extent2D size) const {
+  const auto& device = context_.device();
+  OwnedImage out;
+  vk::ImageCreateInfo info({}, vk::ImageType::e2D, format, vk::Extent3D(size.width, size.height, 1), 1, 1,
+                           vk::SampleCountFlagBits::e1, vk::ImageTiling::eOptimal, usage);
+  out.image = vk::raii::Image(device, info);
+  auto req = out.image.getMemoryRequirements();
+  out.memory =
+      vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(req.size, deviceLocalType(context_, req.memoryTypeBits)));
+  out.image.bindMemory(*out.memory, 0);
+  out.view = vk::raii::ImageView(
+      device, vk::ImageViewCreateInfo({}, *out.image, vk::ImageViewType::e2D, format, {}, kColorRange));
+  return out;
+}
+
+void Presenter::bind(vk::Buffer sums, vk::Extent2D size) {
+  // Always rewritten: the Renderer may have replaced its buffer by one with the same handle value.
+  vulkan::vulkanStep("sizing the viewer's display images", [&] {
+    if (size != size_) {
+      display_ = OwnedImage();
+      sumsCopy_ = OwnedImage();
+      sumsCopy_ = makeImage(kSumsFormat, vk::ImageUsageFlagBits::eTransferDst | vk::ImageUsageFlagBits::eSampled, size);
+      display_ =
+          makeImage(kDisplayFormat, vk::ImageUsageFlagBits::eStorage | vk::ImageUsageFlagBits::eTransferSrc, size);
+    }
+    vk::DescriptorImageInfo sumsInfo(*sampler_, *sumsCopy_.view, vk::ImageLayout::eShaderReadOnlyOptimal);
+    vk::DescriptorImageInfo displayInfo(nullptr, *display_.view, vk::ImageLayout::eGeneral);
+    std::array<vk::WriteDescriptorSet, 2> writes{
+        vk::WriteDescriptorSet(*set_, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eCombinedImageSampler,
+                               &sumsInfo),
+        vk::WriteDescriptorSet(*set_, gpu::kResolveBindingDisplay, 0, 1, vk::DescriptorType::eStorageImage,
+                               &displayInfo)};
+    context_.device().updateDescriptorSets(writes, {});
+  });
+  sums_ = sums;
+  size_ = size;
+}
+
+void Presenter::recordResolve(const vk::raii::CommandBuffer& cmd) const {
+  using Stage = vk::PipelineStageFlagBits;
+  using Access = vk::AccessFlagBits;
+  using Layout = vk::ImageLayout;
+  // The trace's sums -> copy source. The copy's destination was read by the previous frame's resolve
+  // (Stage::eComputeShader as the source scope orders that); its old contents are not needed.
+  vk::BufferMemoryBarrier sumsWritten(Access::eShaderWrite, Access::eTransferRead, VK_QUEUE_FAMILY_IGNORED,
+                                      VK_QUEUE_FAMILY_IGNORED, sums_, 0, VK_WHOLE_SIZE);
+  vk::ImageMemoryBarrier copyWritable({}, Access::eTransferWrite, Layout::eUndefined, Layout::eTransferDstOptimal,
+                                      VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *sumsCopy_.image, kColorRange);
+  cmd.pipelineBarrier(Stage::eComputeShader, Stage::eTransfer, {}, {}, sumsWritten, copyWritable);
+  vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1), {0, 0, 0},
+                             vk::Extent3D(size_.width, size_.height, 1));
+  cmd.copyBufferToImage(sums_, *sumsCopy_.image, Layout::eTransferDstOptimal, region);
+
+  // The copy -> texel fetches. The display image was read by the previous frame's blit
+  // (Stage::eTransfer orders that); its old contents are not needed either.
+  std::array<vk::ImageMemoryBarrier, 2> toResolve{
+      vk::ImageMemoryBarrier(Access::eTransferWrite, Access::eShaderRead, Layout::eTransferDstOptimal,
+                             Layout::eShaderReadOnlyOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                             *sumsCopy_.image, kColorRange),
+      vk::ImageMemoryBarrier({}, Access::eShaderWrite, Layout::eUndefined, Layout::eGeneral, VK_QUEUE_FAMILY_IGNORED,
+                             VK_QUEUE_FAMILY_IGNORED, *display_.image, kColorRange)};
+  cmd.pipelineBarrier(Stage::eTransfer, Stage::eComputeShader, {}, {}, {}, toResolve);
+
+  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, pipeline_->handle());
+  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*set_}, {});
+  // Round up: the shader bounds-checks the partial workgroups at the edges.
+  cmd.dispatch((size_.width + gpu::kWorkgroupSizeX - 1) / gpu::kWorkgroupSizeX,
+               (size_.height + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY, 1);
+}
+
+void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, vk::Image target, vk::Extent2D targetExtent) const {
+  using Stage = vk::PipelineStageFlagBits;
+  using Access = vk::AccessFlagBits;
+  using Layout = vk::ImageLayout;
+
+  // Display image: written -> blit source. Swapchain image: acquired (the submission waits for the
+  // acquire semaphore at the transfer stage, which this barrier's source scope chains to) -> blit
+  // destination; its old contents are discarded.
+  std::array<vk::ImageMemoryBarrier, 2> toBlit{
+      vk::ImageMemoryBarrier(Access::eShaderWrite, Access::eTransferRead, Layout::eGeneral, Layout::eTransferSrcOptimal,
+                             VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *display_.image, kColorRange),
+      vk::ImageMemoryBarrier({}, Access::eTransferWrite, Layout::eUndefined, Layout::eTransferDstOptimal,
+                             VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, target, kColorRange)};
+  cmd.pipelineBarrier(Stage::eComputeShader | Stage::eTransfer, Stage::eTransfer, {}, {}, {}, toBlit);
+
+  vk::ImageSubresourceLayers layers(vk::ImageAspectFlagBits::eColor, 0, 0, 1);
+  vk::ImageBlit region(layers,
+                       {vk::Offset3D(0, 0, 0), vk::Offset3D(static_cast<std::int32_t>(size_.width),
+                                                            static_cast<std::int32_t>(size_.height), 1)},
+                       layers,
+                       {vk::Offset3D(0, 0, 0), vk::Offset3D(static_cast<std::int32_t>(targetExtent.width),
+                                                            static_cast<std::int32_t>(targetExtent.height), 1)});
+  bool scaled = size_ != targetExtent;
+  cmd.blitImage(*display_.image, Layout::eTransferSrcOptimal, target, Layout::eTransferDstOptimal, region,
+                scaled ? vk::Filter::eLinear : vk::Filter::eNearest);
+}
+
+} // namespace vkray

@@ -1,0 +1,58 @@
+// What the viewer's overlay can change while it runs: the accuracy knobs, each effect on or off, the
+// samples traced per frame and where accumulation stops. Pure data and rules, no window.
+#pragma once
+
+#include <cstdint>
+
+#include "scene/scene.h"
+
+namespace vkray {
+
+// Effects the viewer can switch off. Switched off means removed from the scene description before
+// it reaches the Renderer, so Features compiles the effect out exactly as for a scene without it.
+struct EffectToggles {
+  bool shadows = true;    // lights cast shadows
+  bool reflection = true; // mirror reflection (materials' reflection coefficients)
+  bool refraction = true; // transmission through dielectrics
+  bool checker = true;    // checker textures
+
+  bool operator==(const EffectToggles&) const = default;
+};
+
+struct ViewSettings {
+  RenderSettings render;           // accuracy knobs; width and height follow the window
+  EffectToggles effects;           //
+  int samplesPerFrame = 1;         // samples per pixel added by each frame
+  std::uint32_t maxSamples = 4096; // accumulation stops here (the image has converged enough)
+  bool countStats = true;          // ray counters on (they cost about 20 % on lavapipe)
+  double renderScale = 1.0;        // render resolution relative to the window (blit scales up)
+  double motionScale = 1.0;        // further scale while the camera moves (interactive frame rates)
+};
+
+// The scene with the switched-off effects taken out of its description.
+Scene withEffects(const Scene& scene, const EffectToggles& effects);
+
+// True when the two settings trace different images (anything but width and height, which the
+// viewer sets from the window).
+bool sameKnobs(const RenderSettings& a, const RenderSettings& b);
+
+// Progressive refinement: which samples the next frame traces. Still frames add samples
+// base, base + 1, ... of each pixel's sequence; any change restarts at sample 0.
+class Accumulation {
+public:
+  struct Step {
+    std::uint32_t sampleBase = 0; // first sample index this frame traces
+    std::uint32_t count = 0;      // samples per pixel this frame (0: converged, nothing to trace)
+    bool accumulate = false;      // add to the sums already in the image
+  };
+
+  void restart() { samples_ = 0; }
+  // The next frame's samples; counts them as traced.
+  Step next(std::uint32_t samplesPerFrame, std::uint32_t maxSamples);
+  std::uint32_t samples() const { return samples_; }
+
+private:
+  std::uint32_t samples_ = 0; // samples per pixel in the image so far
+};
+
+} // namespace vkray

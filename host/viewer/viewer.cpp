@@ -1,0 +1,574 @@
+// The viewer's frame loop: it owns the window's pieces (swapchain, presenter, overlay, frames in
+// flight) and the camera and settings, and each frame turns input into changes, applies them to the
+// Renderer, traces and presents.
+#include "viewer/viewer.h"
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <memory>
+
+#include "image/image_io.h"
+#include "scene/features.h"
+#include "util/error.h"
+#include "viewer/camera_controller.h"
+#include "viewer/frames.h"
+#include "viewer/overlay.h"
+#include "viewer/presenter.h"
+#include "viewer/scene_watcher.h"
+#include "viewer/swapchain.h"
+#include "viewer/view_settings.h"
+#include "viewer/window.h"
+#include "vk/compute_pipeline.h"
+#include "vk/context.h"
+
+namespace vkray {
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+
+double msBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
+
+bool sameCamera(const Camera& a, const Camera& b) {
+  return a.position == b.position && a.lookAt == b.lookAt && a.up == b.up && a.fovY == b.fovY;
+}
+
+std::string presentModeName(vk::PresentModeKHR mode) {
+  switch (mode) {
+  case vk::PresentModeKHR::eFifo:
+    return "vsync (FIFO)";
+  case vk::PresentModeKHR::eMailbox:
+    return "no vsync (MAILBOX)";
+  case vk::PresentModeKHR::eImmediate:
+    return "no vsync (IMMEDIATE)";
+  default:
+    return vk::to_string(mode);
+  }
+}
+
+// Waits for the device before the GPU objects declared ahead of it are destroyed, also when the loop
+// exits by an exception.
+struct IdleOnExit {
+  const vulkan::Context& context;
+  ~IdleOnExit() {
+    try {
+      context.device().waitIdle();
+    } catch (...) {
+    }
+  }
+};
+
+// Per-frame averages over an interval, for the overlay and the --stats summary.
+struct FrameTimes {
+  double wallMs = 0.0;
+  double hostMs = 0.0;
+  double waitMs = 0.0;    // blocked on fences
+  double presentMs = 0.0; // in acquire and present
+  FrameGpuTimes gpu;
+  std::uint32_t frames = 0;    // wall/host/present samples
+  std::uint32_t gpuFrames = 0; // GPU samples
+
+  void add(const FrameRing::Completed& c) {
+    gpu.trace += c.sum.trace;
+    gpu.resolve += c.sum.resolve;
+    gpu.blit += c.sum.blit;
+    gpu.overlay += c.sum.overlay;
+    gpuFrames += c.frames;
+  }
+  double per(double sum, std::uint32_t n) const { return n > 0 ? sum / n : 0.0; }
+};
+
+class FrameLoop {
+public:
+  FrameLoop(const ViewerOptions& options, Window& window, const vulkan::Context& context, vulkan::PipelineCache* cache,
+            SceneWatcher& watcher, Scene scene)
+      : o_(options), window_(window), context_(context), watcher_(watcher), scene_(std::move(scene)),
+        swapchain_(context, window.createSurface(context.instance()), options.vsync), renderer_(context, cache),
+        presenter_(context, cache, swapchain_.encodeInShader()), frames_(context), camera_(scene_.camera) {
+    settings_.render = scene_.render;
+    settings_.samplesPerFrame = options.samplesPerFrame.value_or(1);
+    settings_.maxSamples = options.maxSamples;
+    settings_.countStats = options.countStats;
+    settings_.renderScale = options.renderScale;
+    // A CPU device cannot trace full frames at interactive rates: while the camera moves, fewer pixels.
+    settings_.motionScale = options.motionScale.value_or(context.info().type == "CPU" ? 0.5 : 1.0);
+    if (scripted()) {
+      // A scripted run traces exactly the frames asked for.
+      settings_.maxSamples = std::max<std::uint32_t>(settings_.maxSamples, o_.frames * settings_.samplesPerFrame);
+    }
+    lastFramebuffer_ = window.framebufferSize();
+    if (!swapchain_.recreate(lastFramebuffer_)) swapchainStale_ = true;
+    overlay_ = std::make_unique<Overlay>(context, window, swapchain_);
+    overlay_->visible = options.overlay;
+  }
+
+  int run();
+
+private:
+  bool scripted() const { return o_.frames > 0; }
+  vk::Extent2D renderSize() const;
+  void recreateSwapchain(vk::Extent2D framebuffer);
+  bool handleInput(const InputFrame& input, double dtSeconds);
+  void handleAction(ViewerAction action);
+  void applyChanges(const ViewSettings& edited, bool sceneReloaded, bool cameraChanged);
+  void quiesce();
+  void collectStats();
+  void publishStats(bool force);
+  void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex);
+  void saveScreenshot(const std::filesystem::path& path);
+  void saveCamera();
+  std::filesystem::path nextScreenshotPath() const;
+  OverlayModel overlayModel() const;
+  void printSummary() const;
+
+  const ViewerOptions& o_;
+  Window& window_;
+  const vulkan::Context& context_;
+  SceneWatcher& watcher_;
+  Scene scene_; // the last good scene with the command-line overrides applied
+
+  // GPU objects, in dependency order; IdleOnExit, declared last, is destroyed first.
+  Swapchain swapchain_;
+  Renderer renderer_;
+  Presenter presenter_;
+  FrameRing frames_;
+  std::unique_ptr<Overlay> overlay_;
+  IdleOnExit idle_{context_};
+
+  CameraController camera_;
+  ViewSettings settings_;
+  Accumulation accumulation_;
+  bool swapchainStale_ = false;
+  static constexpr double kMotionHoldMs = 150.0;
+  std::optional<Clock::time_point> lastCameraChange_;
+  bool moving_ = false;                // the camera changed within kMotionHoldMs: render at motionScale
+  vk::Extent2D lastFramebuffer_{0, 0}; // the window size the swapchain was made for
+  bool prepared_ = false;
+  std::uint32_t tracedFrames_ = 0; // scripted: frames traced at the current render size
+  bool resizeRequested_ = false;
+  Clock::time_point resizeRequestedAt_{};
+
+  // Statistics for the overlay: averages over the last interval, and totals for --stats.
+  FrameTimes interval_;
+  RayStats intervalRays_;
+  FrameTimes shown_;
+  FrameTimes total_;
+  std::uint64_t totalRays_ = 0;
+  Clock::time_point statsTaken_ = Clock::now();
+  RayStats raysPerFrame_;
+  double raysPerSecond_ = 0.0;
+  std::string status_;
+};
+
+vk::Extent2D FrameLoop::renderSize() const {
+  vk::Extent2D e = swapchain_.extent();
+  auto scaled = [&](std::uint32_t v) {
+    double scale = settings_.renderScale * (moving_ ? settings_.motionScale : 1.0);
+    return std::max<std::uint32_t>(1, static_cast<std::uint32_t>(std::lround(v * scale)));
+  };
+  return {scaled(e.width), scaled(e.height)};
+}
+
+void FrameLoop::recreateSwapchain(vk::Extent2D framebuffer) {
+  quiesce();
+  // The overlay's framebuffers name the old image views: gone first. Presentation may still hold the
+  // old images; re-creation with oldSwapchain hands them over.
+  overlay_->detach();
+  swapchainStale_ = !swapchain_.recreate(framebuffer);
+  lastFramebuffer_ = framebuffer;
+  if (!swapchainStale_) overlay_->attach(swapchain_);
+}
+
+void FrameLoop::quiesce() {
+  auto start = Clock::now();
+  frames_.waitAll();
+  interval_.waitMs += msBetween(start, Clock::now());
+}
+
+bool FrameLoop::handleInput(const InputFrame& input, double dtSeconds) {
+  CameraInput in;
+  in.viewportHeight = window_.heightInCursorUnits(); // drags come in the cursor's units
+  in.dtSeconds = dtSeconds;
+  if (!overlay_->wantsMouse()) {
+    bool pan = input.rightDown || input.middleDown || (input.leftDown && input.shift);
+    bool orbit = input.leftDown && !pan;
+    if (pan || orbit) in.drag = input.cursorDelta;
+    in.panDrag = pan;
+    in.orbitDrag = orbit;
+    in.scroll = input.scroll;
+  }
+  if (!overlay_->wantsKeyboard()) {
+    in.move = input.move;
+    in.fast = input.shift;
+    for (ViewerAction a : input.actions) handleAction(a);
+  }
+  return camera_.apply(in);
+}
+
+void FrameLoop::handleAction(ViewerAction action) {
+  switch (action) {
+  case ViewerAction::ToggleFly:
+    camera_.setMode(camera_.mode() == CameraMode::Orbit ? CameraMode::Fly : CameraMode::Orbit);
+    break;
+  case ViewerAction::ResetCamera:
+    camera_.reset();
+    break;
+  case ViewerAction::SaveCamera:
+  case ViewerAction::Screenshot:
+    // A file that cannot be written is reported, and the viewer goes on.
+    try {
+      if (action == ViewerAction::SaveCamera)
+        saveCamera();
+      else
+        saveScreenshot(nextScreenshotPath());
+    } catch (const InputError& e) {
+      status_ = e.what();
+      std::fprintf(stderr, "vkray: %s\n", e.what());
+    }
+    break;
+  case ViewerAction::ToggleOverlay:
+    overlay_->visible = !overlay_->visible;
+    break;
+  case ViewerAction::Quit:
+    window_.requestClose();
+    break;
+  }
+}
+
+void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, bool cameraChanged) {
+  const bool effectsChanged = !(edited.effects == settings_.effects);
+  // Samples per frame and the cap need no restart: the next frame continues the same sequence.
+  const bool knobsChanged = !sameKnobs(edited.render, settings_.render) || edited.countStats != settings_.countStats ||
+                            edited.renderScale != settings_.renderScale;
+  settings_ = edited;
+  // "Moving" lasts a little past the last change, so a slow drag does not flip the resolution.
+  const auto now = Clock::now();
+  if (cameraChanged) lastCameraChange_ = now;
+  moving_ = lastCameraChange_ && msBetween(*lastCameraChange_, now) < kMotionHoldMs;
+  const vk::Extent2D size = renderSize();
+  const bool sizeChanged = size != presenter_.size();
+  if (!(sceneReloaded || effectsChanged || knobsChanged || cameraChanged || sizeChanged || !prepared_)) return;
+
+  // The Renderer's parameters, image and counters are shared by every frame: nothing may be in flight.
+  quiesce();
+  if (sceneReloaded || effectsChanged || !prepared_) renderer_.setScene(withEffects(scene_, settings_.effects));
+  RenderSettings r = settings_.render;
+  r.width = size.width;
+  r.height = size.height;
+  r.spp = settings_.samplesPerFrame;
+  // Progressive sampling already antialiases every pixel; adaptive refinement is a headless pass.
+  r.antialiasing = Antialiasing::Stratified;
+  RenderOptions options;
+  options.progressive = true;
+  options.specialize = o_.specialize;
+  options.countStats = settings_.countStats;
+  renderer_.prepare(camera_.camera(), r, options);
+  presenter_.bind(renderer_.imageBuffer(), size);
+  accumulation_.restart();
+  // A scripted run's frames all belong to the final image: a new size or scene starts the count again.
+  if (sizeChanged || sceneReloaded) tracedFrames_ = 0;
+  prepared_ = true;
+}
+
+void FrameLoop::collectStats() {
+  // Counters and GPU times then cover the same completed frames: the caller waited for all of them.
+  interval_.add(frames_.takeCompleted());
+  intervalRays_ += renderer_.takeStats();
+}
+
+void FrameLoop::publishStats(bool force) {
+  auto now = Clock::now();
+  if (!force && msBetween(statsTaken_, now) < 500.0) return;
+  quiesce();
+  collectStats();
+  const std::uint32_t n = interval_.gpuFrames;
+  if (n > 0) {
+    const RayStats& s = intervalRays_;
+    raysPerFrame_ = RayStats();
+    raysPerFrame_.eye = s.eye / n;
+    raysPerFrame_.shadow = s.shadow / n;
+    raysPerFrame_.reflection = s.reflection / n;
+    raysPerFrame_.refraction = s.refraction / n;
+    raysPerFrame_.bailoutSaved = s.bailoutSaved / n;
+    raysPerFrame_.stackOverflow = s.stackOverflow / n;
+    raysPerFrame_.maxDepth = s.maxDepth;
+    raysPerSecond_ = interval_.gpu.trace > 0.0 ? static_cast<double>(s.total()) / (interval_.gpu.trace * 1e-3) : 0.0;
+  }
+  if (interval_.frames > 0) shown_ = interval_;
+  total_.wallMs += interval_.wallMs;
+  total_.hostMs += interval_.hostMs;
+  total_.waitMs += interval_.waitMs;
+  total_.presentMs += interval_.presentMs;
+  total_.frames += interval_.frames;
+  total_.add({interval_.gpu, interval_.gpuFrames});
+  totalRays_ += intervalRays_.total();
+  interval_ = FrameTimes();
+  intervalRays_ = RayStats();
+  statsTaken_ = now;
+  char title[256];
+  double frameMs = shown_.per(shown_.wallMs, shown_.frames);
+  std::snprintf(title, sizeof title, "vkray - %s - %.1f fps - %u spp", o_.scene.filename().string().c_str(),
+                frameMs > 0 ? 1000.0 / frameMs : 0.0, accumulation_.samples());
+  window_.setTitle(title);
+}
+
+void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex) {
+  const vk::raii::CommandBuffer& cmd = slot.cmd;
+  vulkan::vulkanStep("recording a frame", [&] {
+    cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
+    frames_.resetStamps(cmd);
+    frames_.stamp(cmd, FrameRing::kStart, vk::PipelineStageFlagBits::eTopOfPipe);
+    // The previous frame's trace (which wrote the sums and counters) and its copy of the sums (which
+    // read them) come before this frame's trace adds to the same sums and counters.
+    vk::MemoryBarrier previousFrame(vk::AccessFlagBits::eShaderWrite,
+                                    vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+    cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
+                        vk::PipelineStageFlagBits::eComputeShader, {}, previousFrame, {}, {});
+    if (step.count > 0) renderer_.recordSamples(cmd, step.sampleBase, step.count, step.accumulate);
+    frames_.stamp(cmd, FrameRing::kTraced, vk::PipelineStageFlagBits::eComputeShader);
+    presenter_.recordResolve(cmd);
+    frames_.stamp(cmd, FrameRing::kResolved, vk::PipelineStageFlagBits::eComputeShader);
+    presenter_.recordBlit(cmd, swapchain_.image(imageIndex), swapchain_.extent());
+    frames_.stamp(cmd, FrameRing::kBlitted, vk::PipelineStageFlagBits::eTransfer);
+    overlay_->record(cmd, imageIndex);
+    frames_.stamp(cmd, FrameRing::kDone, vk::PipelineStageFlagBits::eBottomOfPipe);
+    // Screenshots and counters are read by the host (directly or through a staging copy).
+    vk::MemoryBarrier toHost(vk::AccessFlagBits::eShaderWrite,
+                             vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
+    cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
+                        vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, toHost, {}, {});
+    cmd.end();
+  });
+}
+
+void FrameLoop::saveScreenshot(const std::filesystem::path& path) {
+  quiesce();
+  // The Renderer's image, not the swapchain's: no overlay, full float precision until encoding.
+  Image image = renderer_.readImage();
+  writeImage(path, image);
+  status_ = "saved " + path.string() + " (" + std::to_string(accumulation_.samples()) + " samples/pixel)";
+  std::printf("vkray: %s\n", status_.c_str());
+  std::fflush(stdout);
+}
+
+std::filesystem::path FrameLoop::nextScreenshotPath() const {
+  if (!o_.screenshot.empty()) return o_.screenshot;
+  std::string stem = o_.scene.stem().string();
+  for (int i = 1;; ++i) {
+    char name[64];
+    std::snprintf(name, sizeof name, "-%03d.png", i);
+    std::filesystem::path p = stem + name;
+    if (!std::filesystem::exists(p)) return p;
+  }
+}
+
+void FrameLoop::saveCamera() {
+  std::string json = cameraJson(camera_.camera());
+  std::printf("%s\n", json.c_str());
+  std::fflush(stdout);
+  window_.setClipboard(json);
+  std::filesystem::path file = o_.scene.stem().string() + "-camera.json";
+  writeFileAtomic(file, std::vector<std::uint8_t>(json.begin(), json.end()));
+  status_ = "camera copied to the clipboard and saved to " + file.string();
+}
+
+OverlayModel FrameLoop::overlayModel() const {
+  OverlayModel m;
+  m.scenePath = o_.scene.string();
+  m.device = context_.info().name;
+  m.presentMode = presentModeName(swapchain_.presentMode());
+  m.renderSize = presenter_.size();
+  m.samples = accumulation_.samples();
+  m.frameMs = shown_.per(shown_.wallMs, shown_.frames);
+  m.hostMs = shown_.per(shown_.hostMs, shown_.frames);
+  m.traceMs = shown_.per(shown_.gpu.trace, shown_.gpuFrames);
+  m.resolveMs = shown_.per(shown_.gpu.resolve, shown_.gpuFrames);
+  m.blitMs = shown_.per(shown_.gpu.blit, shown_.gpuFrames);
+  m.overlayMs = shown_.per(shown_.gpu.overlay, shown_.gpuFrames);
+  m.raysPerSecond = raysPerSecond_;
+  m.raysPerFrame = raysPerFrame_;
+  m.features = renderer_.currentFeatures().explain();
+  m.cameraJson = cameraJson(camera_.camera());
+  m.cameraMode = camera_.mode();
+  m.reloadError = watcher_.error();
+  m.status = status_;
+  return m;
+}
+
+void FrameLoop::printSummary() const {
+  const FrameTimes& t = total_;
+  std::printf("device: %s\n", context_.info().name.c_str());
+  std::printf("present mode: %s\n", presentModeName(swapchain_.presentMode()).c_str());
+  std::printf("render size: %ux%u\n", presenter_.size().width, presenter_.size().height);
+  std::printf("frames timed: %u\n", t.frames);
+  double frameMs = t.per(t.wallMs, t.frames);
+  std::printf("frame: %.2f ms\n", frameMs);
+  std::printf("fps: %.1f\n", frameMs > 0 ? 1000.0 / frameMs : 0.0);
+  std::printf("trace: %.2f ms\n", t.per(t.gpu.trace, t.gpuFrames));
+  std::printf("resolve: %.2f ms\n", t.per(t.gpu.resolve, t.gpuFrames));
+  std::printf("blit: %.2f ms\n", t.per(t.gpu.blit, t.gpuFrames));
+  std::printf("overlay: %.2f ms\n", t.per(t.gpu.overlay, t.gpuFrames));
+  double gpuMs = t.per(t.gpu.trace + t.gpu.resolve + t.gpu.blit + t.gpu.overlay, t.gpuFrames);
+  std::printf("gpu total: %.2f ms\n", gpuMs);
+  // On a CPU device the presentation copy to the window runs after the frame's GPU work, in series.
+  std::printf("frame minus gpu: %.2f ms\n", frameMs - gpuMs);
+  std::printf("acquire and present: %.2f ms\n", t.per(t.presentMs, t.frames));
+  std::printf("host: %.2f ms\n", t.per(t.hostMs, t.frames));
+  std::printf("wait: %.2f ms\n", t.per(t.waitMs, t.frames));
+  if (settings_.countStats) {
+    std::printf("rays per frame: %.0f\n", t.gpuFrames > 0 ? static_cast<double>(totalRays_) / t.gpuFrames : 0.0);
+    std::printf("mrays/s: %.2f\n", t.gpu.trace > 0 ? static_cast<double>(totalRays_) / (t.gpu.trace * 1e3) : 0.0);
+  }
+  std::printf("samples: %u\n", accumulation_.samples());
+}
+
+int FrameLoop::run() {
+  auto previous = Clock::now();
+  // Frames before this are not timed in --stats (the first ones wait for pipeline creation).
+  const std::uint32_t warmup = scripted() ? std::min<std::uint32_t>(5, o_.frames / 5) : 0;
+  std::uint32_t frameIndex = 0;
+  bool idle = false;
+  while (!window_.shouldClose()) {
+    const vk::Extent2D framebuffer = window_.framebufferSize();
+    const bool minimized = framebuffer.width == 0 || framebuffer.height == 0;
+    // Nothing to trace and nothing happening: sleep until an event (or a reload check is due).
+    window_.pollEvents(minimized || (idle && !scripted()), 0.25);
+    auto frameStart = Clock::now();
+    const double waitedBefore = interval_.waitMs;
+    double dt = std::chrono::duration<double>(frameStart - previous).count();
+    previous = frameStart;
+    InputFrame input = window_.takeInput();
+    if (minimized) continue;
+
+    const vk::Extent2D fb = window_.framebufferSize();
+    if (window_.takeResized() || swapchainStale_ || fb != lastFramebuffer_) recreateSwapchain(fb);
+    if (swapchainStale_) continue;
+
+    overlay_->newFrame();
+    const Camera cameraBefore = camera_.camera();
+    handleInput(input, dt);
+    ViewSettings edited = settings_;
+    OverlayRequests req = overlay_->build(overlayModel(), edited);
+    if (req.toggleFly) handleAction(ViewerAction::ToggleFly);
+    if (req.resetCamera) handleAction(ViewerAction::ResetCamera);
+    if (req.saveCamera) handleAction(ViewerAction::SaveCamera);
+    if (req.screenshot) handleAction(ViewerAction::Screenshot);
+
+    // Scripted runs check every frame, so a test's edit is seen on the next frame.
+    const std::string errorBefore = watcher_.error();
+    bool reloaded = watcher_.poll(scripted() ? std::chrono::milliseconds(0) : std::chrono::milliseconds(250));
+    if (reloaded) {
+      Scene next = watcher_.scene();
+      if (o_.applyOverrides) o_.applyOverrides(next.render);
+      // What was edited in the file is followed (camera, settings); the rest of the user's changes stay.
+      camera_.setHome(next.camera, !sameCamera(next.camera, scene_.camera));
+      if (!sameKnobs(next.render, scene_.render)) edited.render = next.render;
+      scene_ = std::move(next);
+      status_ = "reloaded " + o_.scene.string();
+      std::printf("vkray: %s\n", status_.c_str());
+      std::fflush(stdout);
+    } else if (!watcher_.error().empty() && watcher_.error() != errorBefore) {
+      std::fprintf(stderr, "vkray: reload failed, keeping the last good scene: %s\n", watcher_.error().c_str());
+    }
+    if (o_.spinDegrees != 0.0) camera_.orbit(o_.spinDegrees * 3.14159265358979323846 / 180.0, 0.0);
+    applyChanges(edited, reloaded, !sameCamera(cameraBefore, camera_.camera()));
+    publishStats(false);
+
+    auto beginStart = Clock::now();
+    FrameRing::Slot& slot = frames_.begin();
+    auto acquireStart = Clock::now();
+    interval_.waitMs += msBetween(beginStart, acquireStart);
+    std::optional<std::uint32_t> image = swapchain_.acquire(*slot.imageAcquired);
+    double presentMs = msBetween(acquireStart, Clock::now());
+    if (!image) {
+      swapchainStale_ = true;
+      continue;
+    }
+    Accumulation::Step step = accumulation_.next(settings_.samplesPerFrame, settings_.maxSamples);
+    recordFrame(slot, step, *image);
+    frames_.submit(swapchain_.renderFinished(*image));
+    auto presentStart = Clock::now();
+    if (!swapchain_.present(*image, swapchain_.renderFinished(*image))) swapchainStale_ = true;
+    auto frameEnd = Clock::now();
+    presentMs += msBetween(presentStart, frameEnd);
+    if (frameIndex == 0) {
+      std::printf("vkray: viewing %s on %s, %s; H shows the controls, Esc quits\n", o_.scene.string().c_str(),
+                  context_.info().name.c_str(), presentModeName(swapchain_.presentMode()).c_str());
+      std::fflush(stdout);
+    }
+    idle = step.count == 0 && input.actions.empty() && input.cursorDelta == glm::dvec2(0.0) && input.scroll == 0.0;
+
+    interval_.wallMs += dt * 1000.0;
+    interval_.presentMs += presentMs;
+    interval_.hostMs += std::max(0.0, msBetween(frameStart, frameEnd) - presentMs - (interval_.waitMs - waitedBefore));
+    ++interval_.frames;
+    if (++frameIndex == warmup) {
+      // The summary leaves out the warm-up frames (the first waits for pipeline creation).
+      publishStats(true);
+      total_ = FrameTimes();
+      totalRays_ = 0;
+    }
+
+    if (scripted()) {
+      if (step.count > 0) ++tracedFrames_;
+      const bool wantResize = o_.resizeToWidth && o_.resizeToHeight;
+      if (wantResize && !resizeRequested_ && tracedFrames_ * 2 >= o_.frames) {
+        window_.setSize(*o_.resizeToWidth, *o_.resizeToHeight);
+        resizeRequested_ = true;
+        resizeRequestedAt_ = Clock::now();
+      }
+      const bool resized = !wantResize || swapchain_.extent() == vk::Extent2D(*o_.resizeToWidth, *o_.resizeToHeight);
+      if (wantResize && resizeRequested_ && !resized && msBetween(resizeRequestedAt_, Clock::now()) > 10000.0) {
+        throw Error("the window was not resized to " + std::to_string(*o_.resizeToWidth) + "x" +
+                    std::to_string(*o_.resizeToHeight) + " within 10 s");
+      }
+      if (resized && tracedFrames_ >= o_.frames) break;
+    }
+  }
+
+  publishStats(true);
+  if (context_.validationEnabled() && context_.validationMessageCount() > 0) {
+    throw DeviceError("the validation layer reported " + std::to_string(context_.validationMessageCount()) +
+                      " message(s); no screenshot written");
+  }
+  if (scripted() && !o_.screenshot.empty()) saveScreenshot(o_.screenshot);
+  if (o_.printStats) printSummary();
+  return 0;
+}
+
+} // namespace
+
+int runViewer(const ViewerOptions& o) {
+  if (!o.screenshot.empty()) checkOutputPath(o.screenshot);
+  // The scene loads before any window opens: a broken file stops here with its one-line error.
+  SceneWatcher watcher(o.scene);
+  GlfwSession glfw;
+  Scene scene = watcher.scene();
+  if (o.applyOverrides) o.applyOverrides(scene.render);
+  Window window(glfw, o.windowWidth.value_or(scene.render.width), o.windowHeight.value_or(scene.render.height),
+                "vkray - " + o.scene.filename().string());
+
+  vulkan::ContextOptions co;
+  co.validation = o.validate;
+  co.synchronizationValidation = o.syncValidate;
+  co.device = o.device;
+  co.instanceExtensions = glfw.requiredInstanceExtensions();
+  co.deviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
+  // The queue also blits and draws the overlay; whether it can present to this window is checked
+  // once the surface exists (the filter runs before there is an instance to make one with).
+  co.queueFamilyFilter = [](const vk::raii::PhysicalDevice& pd, std::uint32_t family) {
+    return static_cast<bool>(pd.getQueueFamilyProperties()[family].queueFlags & vk::QueueFlagBits::eGraphics);
+  };
+  vulkan::Context context(co);
+  std::unique_ptr<vulkan::PipelineCache> cache;
+  if (o.pipelineCache) {
+    cache = std::make_unique<vulkan::PipelineCache>(context, vulkan::PipelineCache::defaultFile(context));
+  }
+  FrameLoop loop(o, window, context, cache.get(), watcher, std::move(scene));
+  return loop.run();
+}
+
+} // namespace vkray

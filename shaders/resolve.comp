@@ -1,0 +1,38 @@
+// The viewer's resolve pass: turns the Renderer's per-pixel sums into displayable colour (average,
+// clamp, sRGB encode) in a storage image that is then blitted to the swapchain.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/resolve_types.h"
+
+layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_size_z = 1) in;
+
+layout(constant_id = kResolveSpecEncodeSrgb) const bool ENCODE_SRGB = true;
+
+// The sums arrive as an image copied from the Renderer's buffer: on lavapipe a texel fetch is one
+// vector gather, a storage-buffer read a per-lane loop (it was 80 % of this pass's time).
+layout(binding = kResolveBindingSums) uniform sampler2D sums;
+// Half floats hold both sRGB-encoded values (for a UNORM swapchain, which the blit copies as they
+// are) and linear ones (for an sRGB swapchain, which the blit encodes) without visible banding.
+layout(binding = kResolveBindingDisplay, rgba16f) writeonly uniform image2D display;
+
+// IEC 61966-2-1, as host/image/image.cpp encodes PNGs; branch-free (mix), since CPU drivers run
+// both sides of a branch anyway.
+vec3 linearToSrgb(vec3 v) {
+  v = clamp(v, 0.0, 1.0);
+  vec3 lo = 12.92 * v;
+  vec3 hi = 1.055 * pow(v, vec3(1.0 / 2.4)) - 0.055;
+  return mix(hi, lo, lessThanEqual(v, vec3(0.0031308)));
+}
+
+void main() {
+  // The image size comes from the image itself: no push constant decides a branch (lavapipe's
+  // dispatch-time inlining of uniform values crashes on those, see docs/performance.md).
+  ivec2 size = imageSize(display);
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  if (any(greaterThanEqual(pixel, size))) return;
+  vec4 s = texelFetch(sums, pixel, 0);
+  vec3 rgb = s.rgb / max(s.w, 1.0); // a pixel not traced yet (w = 0) has a zero sum: black
+  rgb = ENCODE_SRGB ? linearToSrgb(rgb) : clamp(rgb, 0.0, 1.0);
+  imageStore(display, pixel, vec4(rgb, 1.0));
+}

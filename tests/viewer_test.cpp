@@ -1,0 +1,441 @@
+// The interactive viewer. ViewSettings* and SceneWatcher* are host tests; Viewer* run build/vkray view
+// in a window on lavapipe with the validation layer on, so they need a display (ctest runs them
+// under xvfb-run): scripted runs exit cleanly, their screenshots equal the headless render of the
+// same view bit for bit, and accumulation converges.
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "image/image_io.h"
+#include "image/metrics.h"
+#include "scene/features.h"
+#include "scene/scene_loader.h"
+#include "viewer/scene_watcher.h"
+#include "viewer/view_settings.h"
+
+namespace vkray::test {
+namespace {
+
+namespace fs = std::filesystem;
+
+std::string slurp(const fs::path& p) {
+  std::ifstream in(p, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+void writeText(const fs::path& p, const std::string& text) {
+  std::ofstream(p) << text;
+}
+
+std::string scene(const std::string& name) {
+  return std::string(VKRAY_SOURCE_DIR "/scenes/") + name;
+}
+
+// ---- Host: settings, effects, accumulation, reload ----------------------------------------------
+
+TEST(ViewSettings, AccumulationAddsSamplesInSequenceAndRestartsAtZero) {
+  Accumulation acc;
+  auto s0 = acc.next(1, 100);
+  EXPECT_EQ(s0.sampleBase, 0u);
+  EXPECT_EQ(s0.count, 1u);
+  EXPECT_FALSE(s0.accumulate) << "the first frame overwrites what an earlier view left";
+  auto s1 = acc.next(1, 100);
+  EXPECT_EQ(s1.sampleBase, 1u);
+  EXPECT_TRUE(s1.accumulate);
+  auto s2 = acc.next(4, 100);
+  EXPECT_EQ(s2.sampleBase, 2u);
+  EXPECT_EQ(s2.count, 4u);
+  EXPECT_EQ(acc.samples(), 6u);
+  acc.restart();
+  auto r = acc.next(2, 100);
+  EXPECT_EQ(r.sampleBase, 0u);
+  EXPECT_FALSE(r.accumulate);
+}
+
+TEST(ViewSettings, AccumulationStopsAtTheCap) {
+  Accumulation acc;
+  EXPECT_EQ(acc.next(3, 5).count, 3u);
+  EXPECT_EQ(acc.next(3, 5).count, 2u) << "the last frame stops exactly at the cap";
+  EXPECT_EQ(acc.next(3, 5).count, 0u) << "converged: nothing more to trace";
+  EXPECT_EQ(acc.samples(), 5u);
+  EXPECT_EQ(acc.next(3, 8).count, 3u) << "raising the cap continues where it stopped";
+}
+
+TEST(ViewSettings, SwitchedOffEffectsAreCompiledOut) {
+  Scene s = loadScene(scene("showcase.json"));
+  Features all = analyzeScene(s, s.render);
+  ASSERT_TRUE(all.shadows);
+  ASSERT_TRUE(all.reflection);
+  ASSERT_TRUE(all.checker);
+  EffectToggles off;
+  off.shadows = false;
+  off.reflection = false;
+  off.checker = false;
+  Scene t = withEffects(s, off);
+  Features f = analyzeScene(t, t.render);
+  EXPECT_FALSE(f.shadows);
+  EXPECT_FALSE(f.reflection);
+  EXPECT_FALSE(f.checker);
+  EXPECT_TRUE(f.spheres) << "geometry stays";
+  Scene same = withEffects(s, EffectToggles());
+  EXPECT_EQ(analyzeScene(same, same.render).explain(), all.explain());
+}
+
+TEST(ViewSettings, RefractionOffMakesGlassOpaque) {
+  Scene s = loadSceneFromString(R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] },
+      "materials": { "glass": { "transmission": 0.9, "ior": 1.5 } },
+      "lights": [ { "type": "point", "position": [0, 5, 5] } ],
+      "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "glass" } ] })",
+                                "glass.json");
+  ASSERT_TRUE(analyzeScene(s, s.render).refraction);
+  EffectToggles off;
+  off.refraction = false;
+  Scene t = withEffects(s, off);
+  EXPECT_FALSE(analyzeScene(t, t.render).refraction);
+}
+
+TEST(ViewSettings, KnobsCompareEverythingButTheImageSize) {
+  RenderSettings a, b;
+  b.width = 17;
+  b.height = 3;
+  EXPECT_TRUE(sameKnobs(a, b));
+  b.maxDepth = a.maxDepth + 1;
+  EXPECT_FALSE(sameKnobs(a, b));
+  b = a;
+  b.numerics = Numerics::Naive;
+  EXPECT_FALSE(sameKnobs(a, b));
+  b = a;
+  b.bailout = 0.5;
+  EXPECT_FALSE(sameKnobs(a, b));
+}
+
+class SceneWatcherTest : public ::testing::Test {
+protected:
+  void SetUp() override {
+    dir_ = fs::temp_directory_path() / ("vkray-watch-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+    file_ = dir_ / "s.json";
+  }
+  void TearDown() override { fs::remove_all(dir_); }
+  // Rewrites the file and moves its time forward, so the change is seen whatever the clock's grain.
+  void rewrite(const std::string& text) {
+    auto t = fs::last_write_time(file_);
+    writeText(file_, text);
+    fs::last_write_time(file_, t + std::chrono::seconds(1));
+  }
+  fs::path dir_, file_;
+};
+
+constexpr const char* kSceneA = R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] },
+  "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 1 } ] })";
+constexpr const char* kSceneB = R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] },
+  "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 2 } ] })";
+
+TEST_F(SceneWatcherTest, ReloadsAChangedFile) {
+  writeText(file_, kSceneA);
+  SceneWatcher w(file_);
+  EXPECT_FALSE(w.poll(std::chrono::milliseconds(0))) << "nothing changed yet";
+  rewrite(kSceneB);
+  EXPECT_TRUE(w.poll(std::chrono::milliseconds(0)));
+  ASSERT_EQ(w.scene().spheres.size(), 1u);
+  EXPECT_EQ(w.scene().spheres[0].radius, 2.0);
+  EXPECT_EQ(w.error(), "");
+}
+
+TEST_F(SceneWatcherTest, ABrokenFileKeepsTheLastGoodSceneAndSaysWhy) {
+  writeText(file_, kSceneA);
+  SceneWatcher w(file_);
+  rewrite(R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] },
+      "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": -1 } ] })");
+  EXPECT_FALSE(w.poll(std::chrono::milliseconds(0)));
+  EXPECT_EQ(w.scene().spheres[0].radius, 1.0) << "the last good scene stays";
+  EXPECT_NE(w.error().find("objects[0].radius: must be > 0, got -1"), std::string::npos) << w.error();
+  rewrite(kSceneB); // fixed
+  EXPECT_TRUE(w.poll(std::chrono::milliseconds(0)));
+  EXPECT_EQ(w.error(), "");
+  EXPECT_EQ(w.scene().spheres[0].radius, 2.0);
+}
+
+TEST_F(SceneWatcherTest, ChecksNoMoreOftenThanAskedAndSurvivesADeletedFile) {
+  writeText(file_, kSceneA);
+  SceneWatcher w(file_);
+  rewrite(kSceneB);
+  EXPECT_FALSE(w.poll(std::chrono::hours(1))) << "checked within the interval";
+  fs::remove(file_);
+  EXPECT_FALSE(w.poll(std::chrono::milliseconds(0)));
+  EXPECT_NE(w.error(), "") << "a missing file is reported";
+  EXPECT_EQ(w.scene().spheres[0].radius, 1.0);
+}
+
+// ---- The viewer in a window ----------------------------------------------------------------------
+
+struct RunResult {
+  int exitCode = -1;
+  std::string out;
+  std::string err;
+};
+
+class Viewer : public ::testing::Test {
+protected:
+  static void SetUpTestSuite() {
+    // One pipeline cache for the suite's runs: the first compiles the kernel, the rest reuse it.
+    cacheDir_ = fs::temp_directory_path() / ("vkray-viewer-cache-" + std::to_string(::getpid()));
+    fs::create_directories(cacheDir_);
+  }
+  static void TearDownTestSuite() { fs::remove_all(cacheDir_); }
+  void SetUp() override {
+    const char* display = std::getenv("DISPLAY");
+    if (display == nullptr || *display == '\0') {
+      GTEST_SKIP() << "no display: the viewer tests run under xvfb-run (ctest's 'viewer' entry)";
+    }
+    dir_ = fs::temp_directory_path() / ("vkray-viewer-test-" + std::to_string(::getpid()));
+    fs::remove_all(dir_);
+    fs::create_directories(dir_);
+  }
+  void TearDown() override {
+    if (!dir_.empty()) fs::remove_all(dir_);
+  }
+
+  // Runs build/vkray with args on lavapipe; `env` prefixes the command (e.g. "env -u DISPLAY").
+  RunResult vkray(const std::string& args, const std::string& env = "") const {
+    std::string cmd = env + " VKRAY_DEVICE=llvmpipe VKRAY_CACHE_DIR='" + cacheDir_.string() + "' '" VKRAY_BINARY "' " +
+                      args + " >'" + (dir_ / "out").string() + "' 2>'" + (dir_ / "err").string() + "'";
+    int status = std::system(cmd.c_str());
+    RunResult r;
+    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+    r.out = slurp(dir_ / "out");
+    r.err = slurp(dir_ / "err");
+    return r;
+  }
+
+  // Scripted viewer run with validation; fails the test unless it exits 0 without a message.
+  Image view(const std::string& sceneFile, const std::string& flags, const std::string& shot) {
+    fs::path out = dir_ / shot;
+    RunResult r = vkray("view '" + sceneFile + "' " + flags + " --screenshot '" + out.string() + "' --validate");
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err, "") << "the validation layer (or something else) complained";
+    EXPECT_TRUE(fs::exists(out)) << r.out << r.err;
+    return fs::exists(out) ? readImage(out) : Image();
+  }
+
+  Image render(const std::string& sceneFile, const std::string& flags, const std::string& file) {
+    fs::path out = dir_ / file;
+    RunResult r = vkray("render '" + sceneFile + "' -o '" + out.string() + "' -q --validate " + flags);
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    return fs::exists(out) ? readImage(out) : Image();
+  }
+
+  static void expectBitIdentical(const Image& a, const Image& b) {
+    ASSERT_EQ(a.width, b.width);
+    ASSERT_EQ(a.height, b.height);
+    std::size_t differing = 0;
+    for (std::size_t i = 0; i < a.pixels.size(); ++i) {
+      if (std::memcmp(&a.pixels[i], &b.pixels[i], sizeof(glm::vec3)) != 0) ++differing;
+    }
+    EXPECT_EQ(differing, 0u) << "of " << a.pixels.size() << " pixels";
+  }
+
+  static fs::path cacheDir_;
+  fs::path dir_;
+};
+
+fs::path Viewer::cacheDir_;
+
+TEST_F(Viewer, ScriptedRunExitsCleanlyUnderValidation) {
+  fs::path shot = dir_ / "shot.png";
+  RunResult r = vkray("view '" + scene("showcase.json") + "' --width 96 --height 72 --frames 3 --screenshot '" +
+                      shot.string() + "' --validate --stats");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  Image img = readImage(shot);
+  EXPECT_EQ(img.width, 96u);
+  EXPECT_EQ(img.height, 72u);
+  EXPECT_NE(r.out.find("render size: 96x72"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("samples: 3"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("fps: "), std::string::npos) << r.out;
+}
+
+// The viewer traces sample k of every pixel's sequence in frame k and adds it to the sums; the
+// headless render at spp N traces samples 0..N-1 in one loop, s0 + s1 + ... in the same order, with
+// the same specialized pipeline. So N still frames of 1 sample equal `render --spp N` bit for bit.
+// (N = 1 is not compared: a headless 1-spp render goes through pixel centres, the viewer's first
+// frame through sample 0 of the sequence, which is what lets later frames converge.)
+TEST_F(Viewer, ScreenshotAfterNFramesEqualsTheHeadlessRenderAtNSppBitForBit) {
+  const std::string size = "--width 96 --height 72";
+  Image viewed = view(scene("showcase.json"), size + " --frames 4 --spp 1", "view.pfm");
+  Image headless = render(scene("showcase.json"), size + " --spp 4 --stats", "render.pfm");
+  expectBitIdentical(viewed, headless);
+}
+
+TEST_F(Viewer, PngScreenshotOfAGlassSceneEqualsTheHeadlessPng) {
+  // Refraction this time (another specialization), with the overlay hidden, through 8-bit PNGs.
+  fs::path glass = dir_ / "glass.json";
+  writeText(glass, R"({ "camera": { "position": [0, 1.5, 6], "look_at": [0, 0.8, 0] },
+      "background": [0.3, 0.4, 0.6],
+      "materials": { "glass": { "color": [1, 1, 1], "diffuse": 0, "ambient": 0, "transmission": 0.9,
+                                "reflection": 0.1, "ior": 1.5 },
+                     "floor": { "checker": { "color2": [0.1, 0.1, 0.1], "scale": 0.5 } } },
+      "lights": [ { "type": "point", "position": [2, 6, 4] } ],
+      "objects": [ { "type": "plane", "normal": [0, 1, 0], "offset": 0, "material": "floor" },
+                   { "type": "sphere", "center": [0, 1, 0], "radius": 1, "material": "glass" } ] })");
+  const std::string size = "--width 80 --height 64 --max-depth 4";
+  Image viewed = view(glass.string(), size + " --frames 2 --no-overlay", "view.png");
+  Image headless = render(glass.string(), size + " --spp 2 --stats", "render.png");
+  expectBitIdentical(viewed, headless);
+}
+
+TEST_F(Viewer, AResizeRestartsAccumulationAtTheNewSize) {
+  // Halfway through, the window is resized; the swapchain, the display image and the Renderer's image
+  // are re-created, and the frames counted again, so the result is a clean 4-frame image at the new size.
+  Image viewed = view(scene("showcase.json"), "--width 96 --height 72 --frames 4 --resize-to 64x40", "resized.pfm");
+  EXPECT_EQ(viewed.width, 64u);
+  EXPECT_EQ(viewed.height, 40u);
+  Image headless = render(scene("showcase.json"), "--width 64 --height 40 --spp 4 --stats", "render.pfm");
+  expectBitIdentical(viewed, headless);
+}
+
+TEST_F(Viewer, StillFramesConvergeTowardsTheHighSppRender) {
+  const std::string size = "--width 64 --height 48";
+  Image reference = render(scene("showcase.json"), size + " --spp 256", "reference.pfm");
+  double previous = 1e30;
+  for (int frames : {1, 4, 16, 64}) {
+    Image viewed = view(scene("showcase.json"), size + " --no-ray-counts --frames " + std::to_string(frames),
+                        "view" + std::to_string(frames) + ".pfm");
+    double rmse = compareImages(viewed, reference).rmse;
+    EXPECT_LT(rmse, previous) << frames << " frames";
+    previous = rmse;
+  }
+  EXPECT_LT(previous, 0.01) << "64 frames are close to the 256-sample reference";
+}
+
+TEST_F(Viewer, EditingTheSceneFileReloadsIt) {
+  // Scene A is on screen; the test replaces the file (as editors do: a new file renamed over the old
+  // one) once the viewer says it is viewing. The run's frames start again with the new scene, so its
+  // screenshot is exactly the headless render of scene B.
+  const char* a = R"({ "camera": { "position": [0, 0, 4], "look_at": [0, 0, 0] },
+      "lights": [ { "type": "point", "position": [3, 3, 3] } ],
+      "materials": { "m": { "color": [0.9, 0.2, 0.1] } },
+      "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 1, "material": "m" } ] })";
+  std::string b = a;
+  b.replace(b.find("[0.9, 0.2, 0.1]"), 15, "[0.1, 0.3, 0.9]");
+  fs::path file = dir_ / "edited.json";
+  writeText(file, a);
+  fs::path shot = dir_ / "edited.pfm";
+  std::string cmd = "VKRAY_DEVICE=llvmpipe VKRAY_CACHE_DIR='" + cacheDir_.string() + "' '" VKRAY_BINARY "' view '" +
+                    file.string() + "' --width 48 --height 36 --frames 8 --validate --screenshot '" + shot.string() +
+                    "' 2>'" + (dir_ / "err").string() + "'";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::vector<std::string> lines;
+  char line[1024];
+  bool edited = false;
+  while (std::fgets(line, sizeof line, pipe) != nullptr) {
+    lines.emplace_back(line);
+    if (!edited && lines.back().rfind("vkray: viewing ", 0) == 0) {
+      fs::path next = dir_ / "edited.json.new";
+      writeText(next, b);
+      // A later time than the first version's, whatever the file system's time grain.
+      fs::last_write_time(next, fs::last_write_time(file) + std::chrono::seconds(2));
+      fs::rename(next, file);
+      edited = true;
+    }
+  }
+  int status = pclose(pipe);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(dir_ / "err");
+  EXPECT_EQ(slurp(dir_ / "err"), "");
+  ASSERT_TRUE(edited) << "the viewer never said it was viewing";
+  bool reloaded = false;
+  for (const auto& l : lines) reloaded = reloaded || l.rfind("vkray: reloaded ", 0) == 0;
+  EXPECT_TRUE(reloaded);
+  Image viewed = readImage(shot);
+  writeText(dir_ / "b.json", b);
+  Image headless = render((dir_ / "b.json").string(), "--width 48 --height 36 --spp 8 --stats", "b.pfm");
+  expectBitIdentical(viewed, headless);
+}
+
+TEST_F(Viewer, ABrokenEditKeepsTheLastGoodSceneAndSaysWhy) {
+  fs::path file = dir_ / "s.json";
+  writeText(file, R"({ "camera": { "position": [0, 0, 4], "look_at": [0, 0, 0] },
+      "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 1 } ] })");
+  std::string cmd = "VKRAY_DEVICE=llvmpipe VKRAY_CACHE_DIR='" + cacheDir_.string() + "' '" VKRAY_BINARY "' view '" +
+                    file.string() + "' --width 32 --height 24 --frames 6 --validate --screenshot '" +
+                    (dir_ / "s.pfm").string() + "' 2>'" + (dir_ / "err").string() + "'";
+  FILE* pipe = popen(cmd.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  char line[1024];
+  bool edited = false;
+  while (std::fgets(line, sizeof line, pipe) != nullptr) {
+    if (!edited && std::string(line).rfind("vkray: viewing ", 0) == 0) {
+      fs::path next = dir_ / "s.json.new";
+      writeText(next, "{ \"camera\": ");
+      fs::last_write_time(next, fs::last_write_time(file) + std::chrono::seconds(2));
+      fs::rename(next, file);
+      edited = true;
+    }
+  }
+  int status = pclose(pipe);
+  EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << slurp(dir_ / "err");
+  std::string err = slurp(dir_ / "err");
+  EXPECT_EQ(err.rfind("vkray: reload failed, keeping the last good scene: " + file.string(), 0), 0u) << err;
+  EXPECT_EQ(std::count(err.begin(), err.end(), '\n'), 1) << err;
+  EXPECT_EQ(readImage(dir_ / "s.pfm").width, 32u) << "the last good scene was still shown and saved";
+}
+
+TEST_F(Viewer, AMovingCameraRestartsAccumulationEveryFrame) {
+  // --spin orbits the camera every frame: each frame re-prepares the Renderer (with the frame before
+  // it finished) and the image starts again, so it ends with one sample per pixel. (--motion-scale 1:
+  // full resolution while moving, to compare with the still image.)
+  fs::path shot = dir_ / "spin.png";
+  RunResult r = vkray("view '" + scene("showcase.json") +
+                      "' --width 64 --height 48 --frames 5 --spin 7 --motion-scale 1 --screenshot '" + shot.string() +
+                      "' --validate --stats");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("samples: 1\n"), std::string::npos) << r.out;
+  Image still = view(scene("showcase.json"), "--width 64 --height 48 --frames 1", "still.png");
+  EXPECT_GT(compareImages(readImage(shot), still).rmse, 0.01) << "the camera did move";
+}
+
+TEST_F(Viewer, AMovingCameraRendersAtTheMotionScale) {
+  RunResult r = vkray("view '" + scene("showcase.json") + "' --width 64 --height 48 --frames 3 --spin 7 " +
+                      "--motion-scale 0.5 --validate --stats --screenshot '" + (dir_ / "m.pfm").string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("render size: 32x24\n"), std::string::npos) << r.out;
+  EXPECT_EQ(readImage(dir_ / "m.pfm").width, 32u);
+}
+
+TEST_F(Viewer, NoDisplayIsAOneLineError) {
+  fs::path shot = dir_ / "x.png";
+  RunResult r = vkray("view '" + scene("showcase.json") + "' --frames 1 --screenshot '" + shot.string() + "'",
+                      "env -u DISPLAY -u WAYLAND_DISPLAY");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_EQ(r.err.rfind("vkray: error: cannot open a window", 0), 0u) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(fs::exists(shot));
+}
+
+TEST_F(Viewer, BrokenSceneFailsBeforeAnyWindowOpens) {
+  fs::path bad = dir_ / "bad.json";
+  writeText(bad, R"({ "camera": { "position": [0,0,5], "look_at": [0,0,0] },
+      "objects": [ { "type": "sphere", "center": [0,0,0], "radius": -1 } ] })");
+  RunResult r = vkray("view '" + bad.string() + "' --frames 1", "env -u DISPLAY");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_EQ(r.err, "vkray: error: " + bad.string() + ": objects[0].radius: must be > 0, got -1\n");
+}
+
+} // namespace
+} // namespace vkray::test
