@@ -24,6 +24,34 @@ void printStat(const char* name, double ms) {
   std::printf("%s: %.2f ms\n", name, ms);
 }
 
+const char* const kNoDevice = "no Vulkan device found: install a Vulkan driver; for the CPU driver lavapipe: "
+                              "apt-get install mesa-vulkan-drivers";
+
+// The devices the installed drivers offer. A driver that finds no hardware (Mesa's Intel or
+// Radeon driver on a machine without that GPU) fails vkEnumeratePhysicalDevices with
+// VK_ERROR_INITIALIZATION_FAILED instead of listing nothing; both mean there is no device.
+std::vector<vulkan::DeviceInfo> availableDevices() {
+  try {
+    auto devices = vulkan::Context::listDevices();
+    if (devices.empty()) throw DeviceError(kNoDevice);
+    return devices;
+  } catch (const vk::InitializationFailedError&) {
+    throw DeviceError(kNoDevice);
+  } catch (const vk::SystemError& e) {
+    throw DeviceError(std::string("listing Vulkan devices: ") + e.what());
+  }
+}
+
+// The context, or, when creating it failed because no device exists at all, that said plainly.
+vulkan::Context openContext(const vulkan::ContextOptions& options) {
+  try {
+    return vulkan::Context(options);
+  } catch (const DeviceError&) {
+    availableDevices(); // throws kNoDevice when that is the cause
+    throw;
+  }
+}
+
 } // namespace
 
 int runRender(const RenderArgs& args) {
@@ -46,7 +74,7 @@ int runRender(const RenderArgs& args) {
   ctxOptions.validation = args.device.validate;
   ctxOptions.synchronizationValidation = args.device.syncValidate;
   ctxOptions.device = args.device.device;
-  vulkan::Context context(ctxOptions);
+  vulkan::Context context = openContext(ctxOptions);
   std::unique_ptr<vulkan::PipelineCache> cache;
   if (!args.device.noPipelineCache) {
     cache = std::make_unique<vulkan::PipelineCache>(context, vulkan::PipelineCache::defaultFile(context));
@@ -134,9 +162,7 @@ int runRender(const RenderArgs& args) {
 }
 
 int runInfo(const DeviceFlags& flags) {
-  auto devices = vulkan::Context::listDevices();
-  if (devices.empty())
-    throw DeviceError("no Vulkan device found: install a driver (apt-get install mesa-vulkan-drivers)");
+  auto devices = availableDevices();
   for (const auto& d : devices) {
     std::printf("device %u: %s\n", d.index, d.name.c_str());
     std::printf("  type: %s\n", d.type.c_str());
@@ -153,7 +179,7 @@ int runInfo(const DeviceFlags& flags) {
   if (!flags.device.empty()) {
     vulkan::ContextOptions options;
     options.device = flags.device;
-    vulkan::Context context(options);
+    vulkan::Context context = openContext(options);
     std::printf("selected: %s\n", context.info().name.c_str());
   }
   return 0;

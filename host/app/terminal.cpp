@@ -1,8 +1,10 @@
 // Ctrl-C handling and the progress bar (see terminal.h).
 #include "app/terminal.h"
 
+#include <algorithm>
 #include <csignal>
 #include <cstdio>
+#include <string>
 
 #include <unistd.h>
 
@@ -12,10 +14,12 @@ namespace {
 
 std::atomic<bool> gInterrupted{false};
 
-extern "C" void onInterrupt(int) {
+// The first SIGINT/SIGTERM asks the render to stop between bands; a second one of either kind
+// ends the process at once, by the signal it received (so the parent sees the right cause).
+extern "C" void onInterrupt(int signal) {
   if (gInterrupted.exchange(true)) {
-    std::signal(SIGINT, SIG_DFL);
-    std::raise(SIGINT);
+    std::signal(signal, SIG_DFL);
+    std::raise(signal);
   }
 }
 
@@ -50,22 +54,32 @@ ProgressBar::~ProgressBar() {
 void ProgressBar::update(const RenderProgress& p) {
   if (!enabled_) return;
   constexpr int kWidth = 30;
-  int filled = static_cast<int>(p.fraction * kWidth + 0.5);
-  char bar[kWidth + 1];
-  for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
-  bar[kWidth] = '\0';
-  std::fprintf(stderr, "\r[%s] %3.0f%%", bar, p.fraction * 100.0);
-  if (p.raysPerSecond > 0) std::fprintf(stderr, "  %.1f Mrays/s", p.raysPerSecond * 1e-6);
-  std::fprintf(stderr, "  %s left   ", formatMs(p.remainingMs).c_str());
+  int filled = std::clamp(static_cast<int>(p.fraction * kWidth + 0.5), 0, kWidth);
+  char percent[16];
+  std::snprintf(percent, sizeof percent, "%3.0f%%", p.fraction * 100.0);
+  std::string line = "[" + std::string(static_cast<std::size_t>(filled), '#') +
+                     std::string(static_cast<std::size_t>(kWidth - filled), '.') + "] " + percent;
+  // Rays per second only when the renderer counts rays (--stats): counting is compiled out otherwise.
+  if (p.raysPerSecond > 0) {
+    char rate[32];
+    std::snprintf(rate, sizeof rate, "  %.1f Mrays/s", p.raysPerSecond * 1e-6);
+    line += rate;
+  }
+  line += "  " + formatMs(p.remainingMs) + " left";
+  // Pad over the rest of a longer previous line; finish() clears exactly what was drawn.
+  int n = static_cast<int>(line.size());
+  std::fprintf(stderr, "\r%s%*s", line.c_str(), std::max(0, width_ - n), "");
   std::fflush(stderr);
+  width_ = std::max(width_, n);
   drawn_ = true;
 }
 
 void ProgressBar::finish() {
   if (drawn_) {
-    std::fprintf(stderr, "\r%60s\r", "");
+    std::fprintf(stderr, "\r%*s\r", width_, "");
     std::fflush(stderr);
     drawn_ = false;
+    width_ = 0;
   }
 }
 

@@ -8,7 +8,7 @@
 
 namespace vkray {
 
-// Installs a SIGINT handler that sets the returned flag; a second Ctrl-C kills at once.
+// Installs a SIGINT and SIGTERM handler that sets the returned flag; a second signal kills at once.
 const std::atomic<bool>& installInterruptFlag();
 
 class ProgressBar {
@@ -21,6 +21,7 @@ public:
 private:
   bool enabled_;
   bool drawn_ = false;
+  int width_ = 0; // columns the widest line drawn so far takes
 };
 
 } // namespace vkray

@@ -4,12 +4,14 @@
 #include <algorithm>
 #include <cerrno>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <iterator>
 #include <sstream>
 
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -78,10 +80,38 @@ std::vector<std::uint8_t> encodePfm(const Image& image) {
   return out;
 }
 
+namespace {
+
+// A write to NAME goes through ".NAME.tmp-PID-XXXXXX" in the same directory. A process killed
+// between creating and renaming it (SIGKILL, power loss) leaves that hidden file behind; the next
+// write to NAME removes those whose PID no longer runs. A live writer's file is never touched.
+std::string temporaryPrefix(const fs::path& path) {
+  return "." + path.filename().string() + ".tmp-";
+}
+
+void removeStaleTemporaries(const fs::path& dir, const fs::path& path) {
+  const std::string prefix = temporaryPrefix(path);
+  std::error_code ec;
+  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
+    std::string name = it->path().filename().string();
+    if (name.rfind(prefix, 0) != 0) continue;
+    const char* digits = name.c_str() + prefix.size();
+    char* rest = nullptr;
+    long pid = std::strtol(digits, &rest, 10);
+    if (rest == digits || *rest != '-' || pid <= 0) continue;
+    // ESRCH: no such process. EPERM means it runs under another user: keep its file.
+    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
+    ::unlink(it->path().c_str());
+  }
+}
+
+} // namespace
+
 void writeFileAtomic(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
   fs::path dir = path.parent_path();
   if (dir.empty()) dir = ".";
-  std::string tmpl = (dir / ("." + path.filename().string() + ".tmp-XXXXXX")).string();
+  removeStaleTemporaries(dir, path);
+  std::string tmpl = (dir / (temporaryPrefix(path) + std::to_string(::getpid()) + "-XXXXXX")).string();
   std::vector<char> name(tmpl.begin(), tmpl.end());
   name.push_back('\0');
   int fd = ::mkstemp(name.data());

@@ -32,6 +32,63 @@ double srgbToLinear(double c) {
   return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
 }
 
+// Messages are one line: control characters that a key, a name or a file name brings in are
+// written as escapes ("\n", "\x1b").
+std::string printable(const std::string& s) {
+  std::string out;
+  out.reserve(s.size());
+  for (char c : s) {
+    auto u = static_cast<unsigned char>(c);
+    if (c == '\n') {
+      out += "\\n";
+    } else if (c == '\r') {
+      out += "\\r";
+    } else if (c == '\t') {
+      out += "\\t";
+    } else if (u < 0x20 || u == 0x7f) {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02x", u);
+      out += hex;
+    } else {
+      out += c;
+    }
+  }
+  return out;
+}
+
+// Deeper nesting than this is refused while parsing. A scene is a few levels deep (a polygon's
+// vertex is at 4); the cap keeps nlohmann's recursive operations (copy, merge_patch for "base",
+// destruction) far from the stack's end and stops a hostile file before it is built.
+constexpr int kMaxJsonDepth = 64;
+struct TooDeep {};
+
+// Where the nesting first goes deeper than kMaxJsonDepth: the byte offset, skipping strings.
+std::size_t tooDeepAt(const std::string& text) {
+  int depth = 0;
+  bool inString = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    char c = text[i];
+    if (inString) {
+      if (c == '\\') ++i;
+      else if (c == '"') inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '[' || c == '{') {
+      if (++depth > kMaxJsonDepth) return i;
+    } else if (c == ']' || c == '}') {
+      --depth;
+    }
+  }
+  return text.size();
+}
+
+std::string lineAndColumn(const std::string& text, std::size_t byte) {
+  std::size_t line = 1 + static_cast<std::size_t>(std::count(text.begin(), text.begin() + byte, '\n'));
+  std::size_t lineStart = byte == 0 ? std::string::npos : text.rfind('\n', byte - 1);
+  std::size_t column = byte - (lineStart == std::string::npos ? 0 : lineStart + 1) + 1;
+  return std::to_string(line) + ":" + std::to_string(column);
+}
+
 } // namespace
 
 std::string formatNumber(double v) {
@@ -41,8 +98,20 @@ std::string formatNumber(double v) {
 }
 
 nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
+  // Called at every value; refuses an object or array opened kMaxJsonDepth levels down.
+  auto limitDepth = [](int depth, nlohmann::json::parse_event_t event, nlohmann::json&) {
+    if ((event == nlohmann::json::parse_event_t::object_start ||
+         event == nlohmann::json::parse_event_t::array_start) &&
+        depth >= kMaxJsonDepth) {
+      throw TooDeep{};
+    }
+    return true;
+  };
   try {
-    return nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+    return nlohmann::json::parse(text, limitDepth, /*allow_exceptions=*/true, /*ignore_comments=*/true);
+  } catch (const TooDeep&) {
+    throw InputError(printable(file) + ":" + lineAndColumn(text, tooDeepAt(text)),
+                     "invalid JSON: nested more than " + std::to_string(kMaxJsonDepth) + " levels deep");
   } catch (const nlohmann::json::parse_error& e) {
     // e.byte is 1-based and points just past the offending character.
     std::size_t byte = e.byte > 0 ? std::min<std::size_t>(e.byte - 1, text.size()) : 0;
@@ -54,17 +123,18 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
     // nlohmann's text is "[json.exception.parse_error.101] parse error at line 1, column 2: ...".
     auto colon = what.find(": ", what.find("parse error"));
     std::string detail = colon == std::string::npos ? what : what.substr(colon + 2);
-    throw InputError(file + ":" + std::to_string(line) + ":" + std::to_string(column), "invalid JSON: " + detail);
+    throw InputError(printable(file) + ":" + std::to_string(line) + ":" + std::to_string(column),
+                     "invalid JSON: " + printable(detail));
   } catch (const nlohmann::json::exception& e) {
     // e.g. "number overflow parsing '1e400'": a number no double can hold.
     std::string what = e.what();
     auto close = what.find("] ");
-    throw InputError(file, "invalid JSON: " + (close == std::string::npos ? what : what.substr(close + 2)));
+    throw InputError(printable(file), "invalid JSON: " + printable(close == std::string::npos ? what : what.substr(close + 2)));
   }
 }
 
 void JsonNode::fail(const std::string& problem) const {
-  throw InputError(*file_ + ": " + (path_.empty() ? "(top level)" : path_), problem);
+  throw InputError(printable(*file_ + ": " + (path_.empty() ? "(top level)" : path_)), printable(problem));
 }
 
 std::string JsonNode::typeName() const {
