@@ -5,7 +5,9 @@
 #include <CLI/CLI.hpp>
 
 #include "app/bench.h"
+#include "app/bench_meshes.h"
 #include "app/commands.h"
+#include "app/view_command.h"
 #include "util/error.h"
 
 int main(int argc, char** argv) {
@@ -44,6 +46,38 @@ int main(int argc, char** argv) {
   addRenderFlags(*benchTimeCmd, benchTime.render);
   addDeviceFlags(*benchTimeCmd, benchTime.device);
 
+  BenchSpecializeArgs benchSpec;
+  auto* benchSpecCmd = benchCmd->add_subcommand("specialize", "specialized vs all-features pipelines, per scene");
+  benchSpecCmd->add_option("scenes", benchSpec.scenes, "scene files (default: every bundled scene)");
+  benchSpecCmd->add_option("--runs", benchSpec.runs, "timed runs per point")->check(CLI::Range(1, 1000));
+  benchSpecCmd->add_option("--height", benchSpec.height, "image height (aspect kept)")->check(CLI::Range(8, 4096));
+  addDeviceFlags(*benchSpecCmd, benchSpec.device);
+
+  ViewArgs view;
+  auto* viewCmd = addViewCommand(app, view);
+
+  BenchMeshesArgs benchMeshes;
+  auto* benchMeshesCmd =
+      benchCmd->add_subcommand("meshes", "BVH build and ray throughput on procedural meshes, with Embree alongside");
+  benchMeshesCmd->add_option("--sizes", benchMeshes.sizes, "triangle counts (approximate)")->delimiter(',');
+  benchMeshesCmd->add_option("--width", benchMeshes.width, "image width")->check(CLI::Range(8, 16384));
+  benchMeshesCmd->add_option("--height", benchMeshes.height, "image height")->check(CLI::Range(8, 16384));
+  benchMeshesCmd->add_option("--runs", benchMeshes.runs, "timed runs per point")->check(CLI::Range(1, 1000));
+  benchMeshesCmd->add_flag("--no-embree", benchMeshes.noEmbree, "skip the Embree side");
+  benchMeshesCmd->add_option("--csv", benchMeshes.csv, "also write the table as CSV (tools/plot-mesh-bench)");
+  addDeviceFlags(*benchMeshesCmd, benchMeshes.device);
+
+  BenchAccuracyArgs benchAcc;
+  auto* benchAccCmd = benchCmd->add_subcommand("accuracy", "error against time for every accuracy knob");
+  benchAccCmd->add_option("scenes", benchAcc.scenes, "scene files (default: showcase, glass, seed)");
+  benchAccCmd->add_option("--out", benchAcc.out, "output directory (CSV, reference and heat-map images)");
+  benchAccCmd->add_option("--runs", benchAcc.runs, "timed runs per point")->check(CLI::Range(1, 1000));
+  benchAccCmd->add_option("--height", benchAcc.height, "image height (aspect kept)")->check(CLI::Range(8, 4096));
+  benchAccCmd->add_option("--reference-spp", benchAcc.referenceSpp, "samples per pixel of the reference")
+      ->check(CLI::Range(1, 4096));
+  benchAccCmd->add_flag("--quick", benchAcc.quick, "tiny images and few points (seconds)");
+  addDeviceFlags(*benchAccCmd, benchAcc.device);
+
   DeviceFlags infoFlags;
   auto* infoCmd = app.add_subcommand("info", "list Vulkan devices and the features vkray uses");
   infoCmd->add_option("--device", infoFlags.device, "also create a context on this device")->envname("VKRAY_DEVICE");
@@ -53,7 +87,11 @@ int main(int argc, char** argv) {
   try {
     if (*renderCmd) return runRender(render);
     if (*infoCmd) return runInfo(infoFlags);
+    if (*viewCmd) return runView(view);
     if (*benchTimeCmd) return runBenchTime(benchTime);
+    if (*benchAccCmd) return runBenchAccuracy(benchAcc);
+    if (*benchMeshesCmd) return runBenchMeshes(benchMeshes);
+    if (*benchSpecCmd) return runBenchSpecialize(benchSpec);
   } catch (const CancelledError&) {
     std::fprintf(stderr, "vkray: interrupted; no output written\n");
     return 130;
