@@ -3,8 +3,11 @@
 // so faces are read untriangulated, every index is checked here, and polygons are split here.
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <fstream>
+#include <iterator>
 #include <set>
+#include <sstream>
 
 #include <tiny_obj_loader.h>
 
@@ -21,8 +24,8 @@ using glm::dvec3;
 class TrackingMaterialReader : public tinyobj::MaterialFileReader {
 public:
   explicit TrackingMaterialReader(const std::string& dir) : tinyobj::MaterialFileReader(dir) {}
-  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials,
-                  std::map<std::string, int>* ids, std::string* warn, std::string* err) override {
+  bool operator()(const std::string& name, std::vector<tinyobj::material_t>* materials, std::map<std::string, int>* ids,
+                  std::string* warn, std::string* err) override {
     bool ok = tinyobj::MaterialFileReader::operator()(name, materials, ids, warn, err);
     if (!ok) missing.push_back(name);
     return ok;
@@ -34,6 +37,41 @@ std::string firstLine(const std::string& s) {
   std::string line = s.substr(0, s.find('\n'));
   while (!line.empty() && (line.back() == '\r' || line.back() == ' ' || line.back() == '.')) line.pop_back();
   return line;
+}
+
+// tinyobjloader reads a coordinate it cannot parse ("nan", "inf", "abc") as 0, silently. The
+// position lines are checked here first, so such a vertex is refused instead of moved to 0.
+void checkPositionLines(const std::string& text, const std::string& where) {
+  std::size_t vertex = 0;
+  std::size_t pos = 0;
+  while (pos < text.size()) {
+    std::size_t end = text.find('\n', pos);
+    if (end == std::string::npos) end = text.size();
+    std::size_t i = text.find_first_not_of(" \t", pos);
+    if (i != std::string::npos && i + 1 < end && text[i] == 'v' && (text[i + 1] == ' ' || text[i + 1] == '\t')) {
+      ++vertex;
+      i += 2;
+      for (int k = 0; k < 3; ++k) {
+        i = text.find_first_not_of(" \t\r", i);
+        if (i >= end) break; // too few coordinates: tinyobjloader's own error
+        std::size_t j = text.find_first_of(" \t\r\n", i);
+        if (j == std::string::npos) j = text.size();
+        std::string token = text.substr(i, j - i);
+        char* stop = nullptr;
+        double value = std::strtod(token.c_str(), &stop);
+        if (stop != token.c_str() + token.size()) {
+          throw InputError(where, "vertex " + std::to_string(vertex) + " (v line " + std::to_string(vertex) + "): '" +
+                                      token + "' is not a number");
+        }
+        if (!std::isfinite(value)) {
+          throw InputError(where, "vertex " + std::to_string(vertex) + " (v line " + std::to_string(vertex) +
+                                      ") is not finite (NaN or Inf)");
+        }
+        i = j;
+      }
+    }
+    pos = end + 1;
+  }
 }
 
 double finiteOr(double v, double fallback) {
@@ -50,7 +88,8 @@ Material mapMtl(const tinyobj::material_t& mtl, const std::string& file) {
                      dvec3(0.0));
   m.ambient = 0.1;
   m.diffuse = 1.0;
-  double ks = std::max({finiteOr(mtl.specular[0], 0.0), finiteOr(mtl.specular[1], 0.0), finiteOr(mtl.specular[2], 0.0)});
+  double ks =
+      std::max({finiteOr(mtl.specular[0], 0.0), finiteOr(mtl.specular[1], 0.0), finiteOr(mtl.specular[2], 0.0)});
   m.specular = std::clamp(ks, 0.0, 1.0);
   m.shininess = std::clamp(finiteOr(mtl.shininess, 40.0), 0.0, 1e6);
   double d = std::clamp(finiteOr(mtl.dissolve, 1.0), 0.0, 1.0);
@@ -66,8 +105,11 @@ Material mapMtl(const tinyobj::material_t& mtl, const std::string& file) {
 
 MeshData readObj(const MeshRequest& request) {
   const std::string& where = request.shownAs;
-  std::ifstream in(request.file, std::ios::binary);
-  if (!in) throw InputError(where, "cannot open for reading");
+  std::ifstream file(request.file, std::ios::binary);
+  if (!file) throw InputError(where, "cannot open for reading");
+  std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
+  checkPositionLines(text, where);
+  std::istringstream in(std::move(text));
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
   std::vector<tinyobj::material_t> materials;

@@ -157,14 +157,15 @@ float intersectTriangleRobust(Ray ray, WatertightRay w, vec3 v0, vec3 v1, vec3 v
   float det = U + V + W;
   if (det == 0.0 || degenerateTriangle(v0, v1, v2)) return -1.0;
   float T = U * A.z + V * B.z + W * C.z;
-  // t = T / det must lie in (0, tMax): compare without dividing, sign-corrected (paper, fig. 2).
-  float detSign = det < 0.0 ? -1.0 : 1.0;
-  float Ts = T * detSign;
-  float detAbs = abs(det);
-  if (Ts <= 0.0 || Ts >= tMax * detAbs) return -1.0;
+  // t = T / det must lie in (0, tMax). Decided on the t that is returned, not by the paper's
+  // division-free T against tMax * det (fig. 2): the two can round an ulp apart, and then which of
+  // two nearly equal hits is kept would depend on the order the triangles are tested in (through
+  // the BVH or brute force). Checked against brute force, bit for bit, in tests/bvh_test.cpp.
   float inv = 1.0 / det;
+  float t = T * inv;
+  if (!(t > 0.0 && t < tMax)) return -1.0;
   bary = vec3(U, V, W) * inv;
-  return T * inv;
+  return t;
 }
 
 // The seed's area test: t from the plane, then the hit point is inside when the three sub-triangle

@@ -1,0 +1,576 @@
+// The BVH (host/accel/bvh.h) on random and adversarial inputs: every primitive reachable exactly
+// once, every node's box contains its children, depth and leaf size within the shader's limits, and
+// closest hits through the tree equal brute force over the same rays bit for bit (BvhBuild, host).
+// On the GPU (GpuBvh): the kernel's traversal finds the same primitive as its brute-force loops for
+// every eye ray, and the same shadows.
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <random>
+#include <set>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "accel/bvh.h"
+#include "render/gpu_scene.h"
+#include "test_support.h"
+#include "util/error.h"
+
+namespace vkray {
+namespace {
+
+using glm::vec3;
+
+struct Tri {
+  vec3 v0, v1, v2;
+};
+
+// ---- A host mirror of the kernel's queries ---------------------------------------------------------
+
+// The watertight test of shaders/lib/intersect.glsl (Woop, Benthin & Wald 2013) in float, the same
+// operations in the same order: the same inputs give the same t whichever order triangles are tested.
+float intersectWatertight(const vec3& o, const vec3& d, const Tri& tri, float tMax) {
+  vec3 a = glm::abs(d);
+  int kz = (a.x > a.y) ? ((a.x > a.z) ? 0 : 2) : ((a.y > a.z) ? 1 : 2);
+  int kx = (kz + 1) % 3;
+  int ky = (kx + 1) % 3;
+  if (d[kz] < 0.0f) std::swap(kx, ky);
+  vec3 shear(d[kx] / d[kz], d[ky] / d[kz], 1.0f / d[kz]);
+  auto sheared = [&](const vec3& v) {
+    vec3 r = v - o;
+    float rz = r[kz];
+    return vec3(r[kx] - shear.x * rz, r[ky] - shear.y * rz, shear.z * rz);
+  };
+  auto edge = [](const vec3& p, const vec3& q) {
+    volatile float x = q.x * p.y; // volatile: no fused multiply-add, as `precise` in the shader
+    volatile float y = q.y * p.x;
+    return x - y;
+  };
+  vec3 A = sheared(tri.v0), B = sheared(tri.v1), C = sheared(tri.v2);
+  float U = edge(B, C), V = edge(C, A), W = edge(A, B);
+  if ((U < 0.0f || V < 0.0f || W < 0.0f) && (U > 0.0f || V > 0.0f || W > 0.0f)) return -1.0f;
+  float det = U + V + W;
+  vec3 e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+  if (det == 0.0f || glm::cross(e1, e2) == vec3(0.0f)) return -1.0f;
+  float T = U * A.z + V * B.z + W * C.z;
+  float t = T * (1.0f / det);
+  return t > 0.0f && t < tMax ? t : -1.0f;
+}
+
+struct HostHit {
+  float t = INFINITY;
+  std::uint32_t prim = ~0u;
+};
+
+HostHit bruteForce(const std::vector<Tri>& tris, const vec3& o, const vec3& d) {
+  HostHit h;
+  for (std::uint32_t i = 0; i < tris.size(); ++i) {
+    float t = intersectWatertight(o, d, tris[i], h.t);
+    if (t > 0.0f) h = {t, i};
+  }
+  return h;
+}
+
+// The kernel's slab test (scene.glsl hitsBox) and its near-child-first traversal with a stack of
+// kBvhStackSize entries; the stack may not overflow.
+bool hitsBox(const vec3& o, const vec3& invDir, const gpu::BvhNode& n, float tMax) {
+  vec3 t0 = (n.boundsMin - o) * invDir;
+  vec3 t1 = (n.boundsMax - o) * invDir;
+  vec3 tNear = glm::min(t0, t1), tFar = glm::max(t0, t1);
+  float enter = std::max(std::max(tNear.x, tNear.y), std::max(tNear.z, 0.0f));
+  float leave = std::min(std::min(tFar.x, tFar.y), std::min(tFar.z, tMax)) * 1.0000003576f;
+  return enter <= leave;
+}
+
+HostHit traverse(const Bvh& bvh, const std::vector<Tri>& tris, const vec3& o, const vec3& d, int& maxStack) {
+  HostHit h;
+  if (bvh.nodes.empty()) return h;
+  vec3 safe(d.x == 0.0f ? 1e-30f : d.x, d.y == 0.0f ? 1e-30f : d.y, d.z == 0.0f ? 1e-30f : d.z);
+  vec3 invDir = 1.0f / safe;
+  std::uint32_t stack[32];
+  int sp = 0;
+  std::uint32_t node = 0;
+  while (true) {
+    const gpu::BvhNode& n = bvh.nodes[node];
+    if (hitsBox(o, invDir, n, h.t)) {
+      std::uint32_t count = nodeCount(n);
+      if (count == 0) {
+        bool neg = d[static_cast<int>(nodeAxis(n))] < 0.0f;
+        if (sp == 32) {
+          maxStack = 33;
+          return h;
+        }
+        stack[sp++] = neg ? node + 1 : n.offset;
+        maxStack = std::max(maxStack, sp);
+        node = neg ? n.offset : node + 1;
+        continue;
+      }
+      for (std::uint32_t k = 0; k < count; ++k) {
+        std::uint32_t prim = bvh.primRefs[n.offset + k] & gpu::kPrimIndexMask;
+        float t = intersectWatertight(o, d, tris[prim], h.t);
+        if (t > 0.0f) h = {t, prim};
+      }
+    }
+    if (sp == 0) return h;
+    node = stack[--sp];
+  }
+}
+
+// ---- Inputs ----------------------------------------------------------------------------------------
+
+std::vector<BvhPrimitive> primitivesOf(const std::vector<Tri>& tris) {
+  std::vector<BvhPrimitive> prims;
+  for (std::uint32_t i = 0; i < tris.size(); ++i) {
+    Aabb b;
+    b.grow(tris[i].v0);
+    b.grow(tris[i].v1);
+    b.grow(tris[i].v2);
+    prims.push_back({b, gpu::kPrimTriangle << gpu::kPrimKindShift | i});
+  }
+  return prims;
+}
+
+std::vector<Tri> randomSoup(std::size_t n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> pos(-10.0f, 10.0f);
+  std::uniform_real_distribution<float> off(-0.8f, 0.8f);
+  std::vector<Tri> tris;
+  for (std::size_t i = 0; i < n; ++i) {
+    vec3 c(pos(rng), pos(rng), pos(rng));
+    tris.push_back({c + vec3(off(rng), off(rng), off(rng)), c + vec3(off(rng), off(rng), off(rng)),
+                    c + vec3(off(rng), off(rng), off(rng))});
+  }
+  return tris;
+}
+
+// A closed bumpy torus (ring radius 3, tube about 1), u x v quads as two triangles sharing edges.
+std::vector<Tri> torus(int u, int v) {
+  auto p = [&](int i, int j) {
+    float a = 2.0f * static_cast<float>(M_PI) * static_cast<float>(i % u) / static_cast<float>(u);
+    float b = 2.0f * static_cast<float>(M_PI) * static_cast<float>(j % v) / static_cast<float>(v);
+    float r = 1.0f + 0.15f * std::sin(5.0f * a) * std::sin(3.0f * b);
+    return vec3((3.0f + r * std::cos(b)) * std::cos(a), r * std::sin(b), (3.0f + r * std::cos(b)) * std::sin(a));
+  };
+  std::vector<Tri> tris;
+  for (int i = 0; i < u; ++i) {
+    for (int j = 0; j < v; ++j) {
+      tris.push_back({p(i, j), p(i, j + 1), p(i + 1, j + 1)});
+      tris.push_back({p(i, j), p(i + 1, j + 1), p(i + 1, j)});
+    }
+  }
+  return tris;
+}
+
+// Every triangle in one place: the same triangle n times (no split plane separates them).
+std::vector<Tri> allInOnePlace(std::size_t n) {
+  return std::vector<Tri>(n, Tri{vec3(-1, -1, 0), vec3(1, -1, 0), vec3(0, 1, 0.5f)});
+}
+
+// Long thin triangles: slivers from one side of the scene to the other, in a fan and crossing.
+std::vector<Tri> longThin(std::size_t n, std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::vector<Tri> tris;
+  for (std::size_t i = 0; i < n; ++i) {
+    vec3 a(u(rng) * 50.0f, u(rng) * 2.0f, u(rng) * 2.0f);
+    vec3 b(-a.x, u(rng) * 2.0f, u(rng) * 2.0f);
+    vec3 c = a + vec3(0.0f, 1e-3f, 2e-3f * u(rng));
+    tris.push_back(i % 2 ? Tri{a, b, c} : Tri{vec3(a.y, a.x, a.z), vec3(b.y, b.x, b.z), vec3(c.y, c.x, c.z)});
+  }
+  return tris;
+}
+
+// Sizes growing geometrically (by 2% each, 1 to 10^5): a pure SAH build peels the large ones off
+// near the root, so the tree is far deeper than balanced.
+std::vector<Tri> geometricSizes(std::size_t n) {
+  std::vector<Tri> tris;
+  float s = 1.0f;
+  for (std::size_t i = 0; i < n; ++i, s *= 1.02f)
+    tris.push_back({vec3(s, 0, 0), vec3(s, 0.5f * s, 0), vec3(s, 0, 0.5f * s)});
+  return tris;
+}
+
+// ---- Independent structural check ------------------------------------------------------------------
+
+// Walks the flattened array as the shader does and checks, without checkBvh: every primitive in
+// exactly one leaf, every node reached once, parents contain children and leaves their primitives,
+// depth <= 32 and leaves of at most 4.
+void expectWellFormed(const Bvh& bvh, const std::vector<BvhPrimitive>& prims) {
+  if (prims.empty()) {
+    EXPECT_TRUE(bvh.nodes.empty());
+    EXPECT_TRUE(bvh.primRefs.empty());
+    return;
+  }
+  ASSERT_FALSE(bvh.nodes.empty());
+  std::vector<int> leafOf(prims.size(), 0);
+  std::vector<int> nodeSeen(bvh.nodes.size(), 0);
+  struct Item {
+    std::uint32_t node;
+    int depth;
+  };
+  std::vector<Item> todo{{0, 1}};
+  int maxDepth = 0;
+  while (!todo.empty()) {
+    Item it = todo.back();
+    todo.pop_back();
+    ASSERT_LT(it.node, bvh.nodes.size());
+    ++nodeSeen[it.node];
+    maxDepth = std::max(maxDepth, it.depth);
+    const gpu::BvhNode& n = bvh.nodes[it.node];
+    std::uint32_t count = nodeCount(n);
+    if (count > 0) {
+      EXPECT_LE(count, 4u);
+      ASSERT_LE(n.offset + count, bvh.primRefs.size());
+      for (std::uint32_t k = 0; k < count; ++k) {
+        std::uint32_t ref = bvh.primRefs[n.offset + k];
+        auto it2 = std::find_if(prims.begin(), prims.end(), [&](const BvhPrimitive& p) { return p.ref == ref; });
+        ASSERT_NE(it2, prims.end()) << "unknown reference " << ref;
+        auto index = static_cast<std::size_t>(it2 - prims.begin());
+        ++leafOf[index];
+        EXPECT_TRUE(nodeBounds(n).contains(prims[index].bounds)) << "leaf " << it.node << " primitive " << index;
+      }
+    } else {
+      std::uint32_t a = it.node + 1, b = n.offset;
+      ASSERT_LT(a, bvh.nodes.size());
+      ASSERT_LT(b, bvh.nodes.size());
+      ASSERT_GT(b, a);
+      EXPECT_TRUE(nodeBounds(n).contains(nodeBounds(bvh.nodes[a]))) << "node " << it.node;
+      EXPECT_TRUE(nodeBounds(n).contains(nodeBounds(bvh.nodes[b]))) << "node " << it.node;
+      todo.push_back({a, it.depth + 1});
+      todo.push_back({b, it.depth + 1});
+    }
+  }
+  EXPECT_LE(maxDepth, 32);
+  EXPECT_EQ(maxDepth, bvh.stats.depth);
+  EXPECT_EQ(std::count(leafOf.begin(), leafOf.end(), 1), static_cast<long>(prims.size()))
+      << "every primitive must be in exactly one leaf";
+  EXPECT_EQ(std::count(nodeSeen.begin(), nodeSeen.end(), 1), static_cast<long>(bvh.nodes.size()))
+      << "every node must be reached exactly once";
+  // The library's own checker agrees.
+  EXPECT_EQ(checkBvh(bvh, prims), "");
+}
+
+// Rays for the hit comparison: random rays through the scene's box from outside and inside, axis-
+// aligned rays (zero direction components), and rays aimed exactly at vertices and edge midpoints.
+struct TestRay {
+  vec3 o, d;
+};
+
+std::vector<TestRay> raysFor(const std::vector<Tri>& tris, std::size_t n, std::uint32_t seed) {
+  Aabb box;
+  for (const Tri& t : tris) {
+    box.grow(t.v0);
+    box.grow(t.v1);
+    box.grow(t.v2);
+  }
+  if (box.empty()) box = Aabb{vec3(-1.0f), vec3(1.0f)};
+  vec3 c = box.center(), ext = box.max - box.min + vec3(1e-3f);
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+  std::uniform_int_distribution<std::size_t> pick(0, std::max<std::size_t>(tris.size(), 1) - 1);
+  auto unit = [&] {
+    vec3 v;
+    do v = vec3(u(rng), u(rng), u(rng));
+    while (glm::length(v) < 0.1f || glm::length(v) > 1.0f);
+    return glm::normalize(v);
+  };
+  std::vector<TestRay> rays;
+  for (std::size_t i = 0; i < n; ++i) {
+    vec3 inside = c + 0.5f * ext * vec3(u(rng), u(rng), u(rng));
+    switch (i % 5) {
+    case 0: // from outside, towards a random point of the box
+      rays.push_back({c + 1.5f * glm::length(ext) * unit(), vec3(0)});
+      rays.back().d = glm::normalize(inside - rays.back().o);
+      break;
+    case 1: // from inside, any direction
+      rays.push_back({inside, unit()});
+      break;
+    case 2: { // axis-aligned
+      vec3 d(0.0f);
+      d[static_cast<int>(i / 5 % 3)] = (i / 15) % 2 ? 1.0f : -1.0f;
+      rays.push_back({inside, d});
+      break;
+    }
+    default: { // exactly at a vertex or an edge midpoint of some triangle
+      if (tris.empty()) {
+        rays.push_back({inside, unit()});
+        break;
+      }
+      const Tri& t = tris[pick(rng)];
+      vec3 target = i % 5 == 3 ? t.v1 : 0.5f * (t.v0 + t.v2);
+      vec3 o = target + 0.7f * glm::length(ext) * unit();
+      rays.push_back({o, glm::normalize(target - o)});
+    }
+    }
+  }
+  return rays;
+}
+
+// Closest hits through the tree are the brute-force hits: the same t bit for bit, and the same
+// triangle unless two triangles are hit at exactly that t (a shared edge or vertex, or coincident
+// triangles), when either is right.
+void expectSameHitsAsBruteForce(const std::vector<Tri>& tris, const Bvh& bvh, std::size_t rayCount,
+                                std::uint32_t seed) {
+  int ties = 0, hits = 0, maxStack = 0;
+  for (const TestRay& r : raysFor(tris, rayCount, seed)) {
+    HostHit brute = bruteForce(tris, r.o, r.d);
+    HostHit tree = traverse(bvh, tris, r.o, r.d, maxStack);
+    ASSERT_EQ(std::memcmp(&brute.t, &tree.t, sizeof(float)), 0)
+        << "t " << brute.t << " (brute force, triangle " << brute.prim << ") vs " << tree.t << " (BVH, triangle "
+        << tree.prim << "); ray " << r.o.x << "," << r.o.y << "," << r.o.z << " dir " << r.d.x << "," << r.d.y << ","
+        << r.d.z;
+    if (brute.prim != tree.prim) {
+      ++ties;
+      ASSERT_NE(tree.prim, ~0u);
+      EXPECT_EQ(intersectWatertight(r.o, r.d, tris[tree.prim], INFINITY), brute.t) << "not a tie";
+    }
+    hits += brute.prim != ~0u ? 1 : 0;
+  }
+  EXPECT_LE(maxStack, 32) << "the kernel's traversal stack would overflow";
+  EXPECT_LE(ties, static_cast<int>(rayCount)); // reported for information
+  if (!tris.empty() && tris.size() > 1) EXPECT_GT(hits, 0) << "the rays must hit something to test anything";
+}
+
+struct Case {
+  const char* name;
+  std::vector<Tri> tris;
+};
+
+std::vector<Case> cases() {
+  return {
+      {"random soup", randomSoup(3000, 1)},
+      {"closed torus", torus(60, 30)},
+      {"all in one place", allInOnePlace(257)},
+      {"long thin", longThin(800, 2)},
+      {"geometric sizes", geometricSizes(600)},
+      {"one triangle", {Tri{vec3(0, 0, 0), vec3(1, 0, 0), vec3(0, 1, 0)}}},
+      {"no triangles", {}},
+  };
+}
+
+TEST(BvhBuild, EveryPrimitiveReachableOnceAndBoxesNest) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    auto prims = primitivesOf(c.tris);
+    Bvh bvh = buildBvh(prims);
+    expectWellFormed(bvh, prims);
+    EXPECT_EQ(bvh.stats.primitives, c.tris.size());
+    EXPECT_EQ(bvh.stats.nodes, bvh.nodes.size());
+  }
+}
+
+TEST(BvhBuild, ClosestHitsEqualBruteForceBitForBit) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    Bvh bvh = buildBvh(primitivesOf(c.tris));
+    expectSameHitsAsBruteForce(c.tris, bvh, 3000, 7);
+  }
+}
+
+// A depth cap that binds: 600 triangles of geometric sizes with leaves of 1 and at most 11 levels
+// (2^10 >= 600) still give a valid tree of depth <= 11 and the same hits.
+TEST(BvhBuild, DepthCapHoldsOnAdversarialInput) {
+  auto tris = geometricSizes(600);
+  BvhOptions options;
+  options.maxLeafSize = 1;
+  options.maxDepth = 11;
+  Bvh bvh = buildBvh(primitivesOf(tris), options);
+  EXPECT_EQ(checkBvh(bvh, primitivesOf(tris), options), "");
+  EXPECT_LE(bvh.stats.depth, 11);
+  // Uncapped, the SAH tree is deeper: the cap is what holds the depth.
+  BvhOptions deep = options;
+  deep.maxDepth = 1000;
+  EXPECT_GT(buildBvh(primitivesOf(tris), deep).stats.depth, 11);
+  expectSameHitsAsBruteForce(tris, bvh, 1000, 3);
+  // Too many primitives for the cap: refused, not a tree that overflows the shader's stack.
+  options.maxDepth = 4;
+  EXPECT_THROW(buildBvh(primitivesOf(tris), options), Error);
+}
+
+TEST(BvhBuild, NonFiniteBoundsAreRefused) {
+  auto prims = primitivesOf(randomSoup(10, 3));
+  prims[4].bounds.max.y = INFINITY;
+  EXPECT_THROW(buildBvh(prims), Error);
+}
+
+// The parallel build makes the same decisions as the serial one: the same array, byte for byte.
+TEST(BvhBuild, ParallelBuildEqualsSerialBuild) {
+  auto prims = primitivesOf(randomSoup(40000, 5));
+  BvhOptions serial;
+  serial.threads = 1;
+  BvhOptions parallel;
+  parallel.threads = 4;
+  Bvh a = buildBvh(prims, serial);
+  Bvh b = buildBvh(prims, parallel);
+  ASSERT_EQ(a.nodes.size(), b.nodes.size());
+  EXPECT_EQ(std::memcmp(a.nodes.data(), b.nodes.data(), a.nodes.size() * sizeof(gpu::BvhNode)), 0);
+  EXPECT_EQ(a.primRefs, b.primRefs);
+}
+
+// The SAH pays off: on a mesh the expected cost per ray is far below testing every triangle.
+TEST(BvhBuild, SahTreeIsMuchCheaperThanBruteForce) {
+  auto tris = torus(100, 50);
+  Bvh bvh = buildBvh(primitivesOf(tris));
+  EXPECT_LT(bvh.stats.sahCost, 0.01 * static_cast<double>(tris.size())) << bvh.stats.sahCost;
+  EXPECT_LE(bvh.stats.depth, 32);
+}
+
+// packScene with a BVH stores triangles in leaf order (orderByLeaves): afterwards primRefs[i] is
+// triangle i, the triangles are the same set, and each keeps its own material and shading normals.
+TEST(BvhBuild, LeafOrderKeepsEveryTriangleWithItsNormals) {
+  Scene scene;
+  auto tris = torus(20, 10);
+  for (std::size_t i = 0; i < tris.size(); ++i) {
+    Triangle t;
+    t.v[0] = tris[i].v0;
+    t.v[1] = tris[i].v1;
+    t.v[2] = tris[i].v2;
+    t.material = static_cast<std::uint32_t>(i);
+    if (i % 3 == 0) {
+      glm::dvec3 n = glm::normalize(glm::cross(t.v[1] - t.v[0], t.v[2] - t.v[0]));
+      t.normals = std::array<glm::dvec3, 3>{n, n, glm::dvec3(static_cast<double>(i), 0, 1)};
+    }
+    scene.triangles.push_back(t);
+  }
+  scene.camera.position = {0, 0, 10};
+  GpuScene g = packScene(scene, scene.camera.position, true);
+  ASSERT_EQ(g.triangles.size(), tris.size());
+  std::set<std::uint32_t> materials;
+  for (std::uint32_t i = 0; i < g.bvh.primRefs.size(); ++i) {
+    EXPECT_EQ(g.bvh.primRefs[i], gpu::kPrimTriangle << gpu::kPrimKindShift | i);
+    const gpu::Triangle& t = g.triangles[i];
+    std::uint32_t m;
+    std::memcpy(&m, &t.v0.w, sizeof m);
+    materials.insert(m);
+    const Tri& original = tris[m];
+    EXPECT_EQ(vec3(t.v0), vec3(glm::dvec3(original.v0) - scene.camera.position));
+    std::uint32_t normalBase;
+    std::memcpy(&normalBase, &t.v1.w, sizeof normalBase);
+    if (m % 3 == 0) {
+      ASSERT_NE(normalBase, gpu::kNoNormals);
+      EXPECT_EQ(g.normals[normalBase + 2].x, static_cast<float>(m)) << "triangle " << m;
+    } else {
+      EXPECT_EQ(normalBase, gpu::kNoNormals);
+    }
+  }
+  EXPECT_EQ(materials.size(), tris.size());
+}
+
+// ---- GPU: the kernel's traversal against its brute-force loops -------------------------------------
+
+glm::dvec3 idColor(std::uint32_t id) {
+  return glm::dvec3((id & 255u) / 255.0, ((id >> 8) & 255u) / 255.0, (((id >> 16) & 255u) + 1) / 255.0);
+}
+
+std::uint32_t colorId(const glm::vec3& c) {
+  auto byte = [](float x) { return static_cast<std::uint32_t>(std::lround(x * 255.0f)); };
+  return byte(c.r) | byte(c.g) << 8 | (byte(c.b) - 1) << 16;
+}
+
+// A scene of every bounded kind, each primitive with a material of its own colour: with ambient
+// light 1 and nothing else, a pixel's colour names the primitive its eye ray hit. Triangles 0..n-1,
+// then spheres, then polygons.
+Scene idScene(const std::vector<Tri>& tris, bool lit, BvhMode bvh) {
+  Scene scene;
+  scene.camera.position = {1.0, 6.0, 9.0};
+  scene.camera.lookAt = {0.0, 0.0, 0.0};
+  scene.camera.fovY = 50.0;
+  scene.render.width = 96;
+  scene.render.height = 72;
+  scene.render.maxDepth = 0;
+  scene.render.bvh = bvh;
+  scene.background = glm::dvec3(0.0);
+  scene.ambientLight = glm::dvec3(lit ? 0.2 : 1.0);
+  std::uint32_t id = 0;
+  auto material = [&] {
+    Material m;
+    m.color = idColor(id++);
+    m.ambient = 1.0;
+    m.diffuse = lit ? 0.8 : 0.0;
+    m.specular = 0.0;
+    scene.materials.push_back(m);
+    return static_cast<std::uint32_t>(scene.materials.size() - 1);
+  };
+  for (const Tri& t : tris) {
+    Triangle tri;
+    tri.v[0] = t.v0;
+    tri.v[1] = t.v1;
+    tri.v[2] = t.v2;
+    tri.material = material();
+    scene.triangles.push_back(tri);
+  }
+  for (int i = 0; i < 6; ++i) {
+    double a = i * M_PI / 3.0;
+    scene.spheres.push_back({glm::dvec3(2.0 * std::cos(a), 0.3, 2.0 * std::sin(a)), 0.6, material()});
+  }
+  Polygon floor;
+  floor.vertices = {{-6, -1.5, -6}, {-6, -1.5, 6}, {6, -1.5, 6}, {6, -1.5, -6}};
+  floor.normal = {0, 1, 0};
+  floor.material = material();
+  scene.polygons.push_back(floor);
+  if (lit) scene.lights.push_back(PointLight{glm::dvec3(3.0, 8.0, 2.0), glm::dvec3(1.0), true});
+  return scene;
+}
+
+// Whether two triangles share a vertex (a ray exactly on their common edge or vertex hits both at
+// the same t, and then either is a correct closest hit).
+bool touching(const Tri& a, const Tri& b) {
+  for (const vec3& p : {a.v0, a.v1, a.v2}) {
+    for (const vec3& q : {b.v0, b.v1, b.v2}) {
+      if (p == q) return true;
+    }
+  }
+  return false;
+}
+
+TEST(GpuBvh, EyeRayHitsEqualBruteForce) {
+  auto tris = torus(48, 24); // 2304 triangles
+  Image viaBvh = test::render(idScene(tris, false, BvhMode::On)).image;
+  Image brute = test::render(idScene(tris, false, BvhMode::Off)).image;
+  test::expectNoValidationMessages();
+  ASSERT_EQ(viaBvh.pixels.size(), brute.pixels.size());
+  const std::uint32_t prims = static_cast<std::uint32_t>(tris.size()) + 7;
+  std::set<std::uint32_t> seen;
+  int ties = 0;
+  for (std::size_t i = 0; i < brute.pixels.size(); ++i) {
+    const glm::vec3 a = brute.pixels[i], b = viaBvh.pixels[i];
+    if (a == glm::vec3(0.0f)) {
+      EXPECT_EQ(b, a) << "pixel " << i << ": the BVH hit something brute force missed";
+      continue;
+    }
+    std::uint32_t ida = colorId(a), idb = colorId(b);
+    ASSERT_LT(ida, prims) << "pixel " << i;
+    seen.insert(ida);
+    if (ida == idb) continue;
+    // Only a tie between neighbouring triangles may resolve differently.
+    ASSERT_LT(idb, tris.size()) << "pixel " << i << ": brute force hit " << ida << ", the BVH " << idb;
+    ASSERT_LT(ida, tris.size()) << "pixel " << i << ": brute force hit " << ida << ", the BVH " << idb;
+    EXPECT_TRUE(touching(tris[ida], tris[idb])) << "pixel " << i << ": " << ida << " vs " << idb;
+    ++ties;
+  }
+  EXPECT_GT(seen.size(), 500u) << "the view must show many primitives";
+  EXPECT_LE(ties, 10) << "more ties than rays exactly on edges can explain";
+  std::printf("[ bvh ] %zu primitives seen, %d edge ties resolved differently\n", seen.size(), ties);
+}
+
+// Shadow rays stop at the first hit (any-hit) in both paths; they must agree on what is in shadow.
+TEST(GpuBvh, ShadowsEqualBruteForce) {
+  auto tris = torus(48, 24);
+  Image viaBvh = test::render(idScene(tris, true, BvhMode::On)).image;
+  Image brute = test::render(idScene(tris, true, BvhMode::Off)).image;
+  Scene unshadowed = idScene(tris, true, BvhMode::On);
+  unshadowed.lights[0].shadows = false;
+  Image noShadows = test::render(unshadowed).image;
+  test::expectNoValidationMessages();
+  int differing = 0, shadowed = 0;
+  for (std::size_t i = 0; i < brute.pixels.size(); ++i) {
+    if (brute.pixels[i] != viaBvh.pixels[i]) ++differing;
+    if (brute.pixels[i] != noShadows.pixels[i]) ++shadowed;
+  }
+  EXPECT_EQ(differing, 0);
+  EXPECT_GT(shadowed, 200) << "the scene must have shadows to compare";
+}
+
+} // namespace
+} // namespace vkray
