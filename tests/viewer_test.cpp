@@ -1,7 +1,7 @@
 // The interactive viewer. ViewSettings* and SceneWatcher* are host tests; Viewer* run build/vkray view
 // in a window on lavapipe with the validation layer on, so they need a display (ctest runs them
 // under xvfb-run): scripted runs exit cleanly, their screenshots equal the headless render of the
-// same view bit for bit, and accumulation converges.
+// same view bit for bit, the window shows that image under the overlay, and accumulation converges.
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -266,6 +266,44 @@ TEST_F(Viewer, ScriptedRunExitsCleanlyUnderValidation) {
   EXPECT_NE(r.out.find("render size: 96x72"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("samples: 3"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("fps: "), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("present mode: vsync (FIFO)\n"), std::string::npos) << "vsync is the default\n" << r.out;
+}
+
+// What the window shows is the Renderer's image: read back from the swapchain image after the overlay
+// (--screenshot-window) and compared with the Renderer's own screenshot of the same frame. Right of the
+// overlay's panel they agree to one 8-bit level: the resolve pass encodes sRGB with the GPU's pow into
+// a half-float image and the blit rounds that to 8 bits, while the PNG writer encodes the float sums
+// on the host; a swapped channel, a flipped row order or a missing/double sRGB encoding would be off by
+// far more. Under the panel the overlay was drawn on the window, and not into the screenshot.
+TEST_F(Viewer, TheWindowShowsTheRenderersImageWithTheOverlayOnTop) {
+  fs::path shot = dir_ / "shot.png";
+  fs::path window = dir_ / "window.png";
+  RunResult r =
+      vkray("view '" + scene("showcase.json") + "' --width 480 --height 200 --frames 2 --no-vsync --screenshot '" +
+            shot.string() + "' --screenshot-window '" + window.string() + "' --validate --stats");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("present mode: no vsync ("), std::string::npos) << "--no-vsync\n" << r.out;
+  Image a = readImage(shot);
+  Image b = readImage(window);
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  constexpr std::uint32_t kPanelRight = 8 + 340 + 8; // overlay.cpp: the panel's position and width, and a margin
+  int maxOutside = 0;
+  std::size_t differentInside = 0;
+  for (std::uint32_t y = 0; y < a.height; ++y) {
+    for (std::uint32_t x = 0; x < a.width; ++x) {
+      int d = 0;
+      for (int c = 0; c < 3; ++c)
+        d = std::max(d, std::abs(int(encodeSrgb8(a.at(x, y)[c])) - encodeSrgb8(b.at(x, y)[c])));
+      if (x >= kPanelRight)
+        maxOutside = std::max(maxOutside, d);
+      else if (d > 8)
+        ++differentInside;
+    }
+  }
+  EXPECT_LE(maxOutside, 1) << "8-bit levels between the window and the Renderer's image";
+  EXPECT_GT(differentInside, std::size_t(kPanelRight) * a.height / 2) << "the overlay covers its panel";
 }
 
 // The viewer traces sample k of every pixel's sequence in frame k and adds it to the sums; the

@@ -1,6 +1,9 @@
 // `vkray view`: the interactive viewer's command line. The viewer itself lives in host/viewer/.
 #include "app/view_command.h"
 
+#include <cstdio>
+
+#include "scene/scene_loader.h"
 #include "util/error.h"
 #include "viewer/viewer.h"
 
@@ -27,6 +30,8 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   cmd->add_flag("--stats", a.stats, "print frame timings as 'name: value' lines at exit");
   cmd->add_option("--spin", a.spin, "orbit the camera by this many degrees per frame (benchmarks)");
   cmd->add_option("--resize-to", a.resizeTo, "scripted: resize the window to WxH halfway through (tests)");
+  cmd->add_option("--screenshot-window", a.windowScreenshot,
+                  "scripted: also save the window as shown, overlay included (.png or .pfm)");
   addRenderFlags(*cmd, a.render);
   addDeviceFlags(*cmd, a.device);
   return cmd;
@@ -55,6 +60,7 @@ int runView(const ViewArgs& a) {
   o.screenshot = a.screenshot;
   o.spinDegrees = a.spin;
   o.printStats = a.stats;
+  o.windowScreenshot = a.windowScreenshot;
   if (!a.resizeTo.empty()) {
     unsigned w = 0, h = 0;
     char x = 0;
@@ -66,6 +72,77 @@ int runView(const ViewArgs& a) {
     o.resizeToHeight = h;
   }
   return runViewer(o);
+}
+
+CLI::App* addBenchViewCommand(CLI::App& bench, BenchViewArgs& a) {
+  auto* cmd = bench.add_subcommand("view", "viewer frames per second and where a frame's time goes (needs a display)");
+  cmd->add_option("scenes", a.scenes, "scene files")->required();
+  cmd->add_option("--frames", a.frames, "timed frames per row (after 5 warm-up frames)")
+      ->check(CLI::Range(1u, 100000u));
+  cmd->add_option("--spin", a.spin, "degrees the camera orbits per frame in the moving rows");
+  addRenderFlags(*cmd, a.render);
+  addDeviceFlags(*cmd, a.device);
+  return cmd;
+}
+
+int runBenchView(const BenchViewArgs& a) {
+  struct Row {
+    const char* name;
+    bool counters, overlay, moving;
+    std::optional<double> motionScale; // default: the viewer's (0.5 on CPU devices)
+    double scale = 1.0;
+  };
+  // The viewer's defaults first, then one change at a time.
+  const Row rows[] = {
+      {"still, overlay, ray counts", true, true, false, std::nullopt},
+      {"still, overlay", false, true, false, std::nullopt},
+      {"still", false, false, false, std::nullopt},
+      {"moving, overlay", false, true, true, std::nullopt},
+      {"moving, overlay, full res", false, true, true, 1.0},
+      {"still, overlay, --scale 0.5", false, true, false, std::nullopt, 0.5},
+  };
+  for (const auto& path : a.scenes) {
+    bool header = false;
+    for (const Row& row : rows) {
+      ViewerOptions o;
+      o.scene = path;
+      o.applyOverrides = [flags = a.render](RenderSettings& s) { applyRenderFlags(flags, s); };
+      o.samplesPerFrame = a.render.spp;
+      o.windowWidth = a.render.width;
+      o.windowHeight = a.render.height;
+      o.device = a.device.device;
+      o.validate = a.device.validate;
+      o.pipelineCache = !a.device.noPipelineCache;
+      o.vsync = false; // the frame rate of the work, not of the display
+      o.countStats = row.counters;
+      o.overlay = row.overlay;
+      o.spinDegrees = row.moving ? a.spin : 0.0;
+      o.motionScale = row.motionScale;
+      o.renderScale = row.scale;
+      o.frames = a.frames + 5; // the viewer leaves the first 5 out of its figures
+      ViewerSummary v;
+      o.summary = &v;
+      runViewer(o);
+      if (!header) {
+        Scene scene = loadScene(path);
+        applyRenderFlags(a.render, scene.render);
+        std::printf("%s: window %ux%u, max_depth %d, %s, %s\n", path.string().c_str(), v.windowWidth, v.windowHeight,
+                    scene.render.maxDepth, v.device.c_str(), v.presentMode.c_str());
+        std::printf("%-27s %9s %6s %8s %7s %7s %6s %7s %6s %7s %7s\n", "", "render", "fps", "frame", "trace", "resolve",
+                    "blit", "overlay", "host", "present", "trace%");
+        header = true;
+      }
+      char size[32];
+      std::snprintf(size, sizeof size, "%ux%u", v.renderWidth, v.renderHeight);
+      // GPU parts from timestamps; host = the loop's own CPU time; present = in acquire + present,
+      // which on lavapipe includes waiting for the frame's GPU work.
+      std::printf("%-27s %9s %6.1f %8.2f %7.2f %7.2f %6.2f %7.2f %6.2f %7.2f %6.0f%%\n", row.name, size, v.fps(),
+                  v.frameMs, v.traceMs, v.resolveMs, v.blitMs, v.overlayMs, v.hostMs, v.presentMs,
+                  v.frameMs > 0 ? 100.0 * v.traceMs / v.frameMs : 0.0);
+      std::fflush(stdout);
+    }
+  }
+  return 0;
 }
 
 } // namespace vkray

@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -28,10 +29,24 @@ struct ViewArgs {
   std::optional<double> motionScale;
   double spin = 0.0;
   std::string resizeTo; // WxH
+  std::filesystem::path windowScreenshot;
+};
+
+struct BenchViewArgs {
+  std::vector<std::filesystem::path> scenes;
+  DeviceFlags device;
+  RenderFlags render;
+  std::uint32_t frames = 40; // timed frames per row, after the warm-up
+  double spin = 2.0;         // degrees per frame in the moving rows
 };
 
 // Registers the `view` subcommand's options on `app`, writing into `args`.
 CLI::App* addViewCommand(CLI::App& app, ViewArgs& args);
 int runView(const ViewArgs& args);
+
+// `vkray bench view`: scripted viewer runs, still and moving, with and without counters and
+// overlay; fps and where a frame's time goes, one row per run.
+CLI::App* addBenchViewCommand(CLI::App& bench, BenchViewArgs& args);
+int runBenchView(const BenchViewArgs& args);
 
 } // namespace vkray

@@ -33,10 +33,12 @@ void FrameRing::collect(std::uint32_t index) {
   slot.submitted = false;
   ++completed_.frames;
   if (!timestamps_) return;
-  auto [result, ticks] =
+  // Not a structured binding: clang 14 (the sanitizer build's compiler) cannot capture one in a lambda.
+  auto results =
       queries_.getResults<std::uint64_t>(index * kStampCount, kStampCount, kStampCount * sizeof(std::uint64_t),
                                          sizeof(std::uint64_t), vk::QueryResultFlagBits::e64);
-  if (result != vk::Result::eSuccess) return;
+  if (results.first != vk::Result::eSuccess) return;
+  const std::vector<std::uint64_t>& ticks = results.second;
   double msPerTick = context_.timestampPeriodNs() * 1e-6;
   auto span = [&](Stamp a, Stamp b) { return ticks[b] >= ticks[a] ? double(ticks[b] - ticks[a]) * msPerTick : 0.0; };
   completed_.sum.trace += span(kStart, kTraced);

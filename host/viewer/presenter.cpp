@@ -153,4 +153,26 @@ void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, vk::Image target,
                 scaled ? vk::Filter::eLinear : vk::Filter::eNearest);
 }
 
+void Presenter::recordWindowReadback(const vk::raii::CommandBuffer& cmd, vk::Image shown, vk::Extent2D extent,
+                                     vk::Buffer pixels) {
+  using Stage = vk::PipelineStageFlagBits;
+  using Access = vk::AccessFlagBits;
+  using Layout = vk::ImageLayout;
+  // The overlay's pass wrote the image and left it in PRESENT_SRC: its writes -> the copy.
+  vk::ImageMemoryBarrier toCopy(Access::eColorAttachmentWrite, Access::eTransferRead, Layout::ePresentSrcKHR,
+                                Layout::eTransferSrcOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, shown,
+                                kColorRange);
+  cmd.pipelineBarrier(Stage::eColorAttachmentOutput, Stage::eTransfer, {}, {}, {}, toCopy);
+  vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1), {0, 0, 0},
+                             vk::Extent3D(extent.width, extent.height, 1));
+  cmd.copyImageToBuffer(shown, Layout::eTransferSrcOptimal, pixels, region);
+  // Back to PRESENT_SRC for the present (which the submission's semaphore orders after all of this);
+  // the copy's writes -> the host, which reads them after the frame's fence.
+  vk::ImageMemoryBarrier toPresent(Access::eTransferRead, {}, Layout::eTransferSrcOptimal, Layout::ePresentSrcKHR,
+                                   VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, shown, kColorRange);
+  vk::BufferMemoryBarrier toHost(Access::eTransferWrite, Access::eHostRead, VK_QUEUE_FAMILY_IGNORED,
+                                 VK_QUEUE_FAMILY_IGNORED, pixels, 0, VK_WHOLE_SIZE);
+  cmd.pipelineBarrier(Stage::eTransfer, Stage::eBottomOfPipe | Stage::eHost, {}, {}, toHost, toPresent);
+}
+
 } // namespace vkray

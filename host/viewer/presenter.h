@@ -26,6 +26,11 @@ public:
   // previous contents are discarded).
   void recordBlit(const vk::raii::CommandBuffer& cmd, vk::Image target, vk::Extent2D targetExtent) const;
 
+  // Records a copy of a presentable swapchain image (after the overlay's pass, in PRESENT_SRC) into a
+  // host-visible buffer, and gives the image back to presentation. For window screenshots.
+  static void recordWindowReadback(const vk::raii::CommandBuffer& cmd, vk::Image shown, vk::Extent2D extent,
+                                   vk::Buffer pixels);
+
   vk::Extent2D size() const { return size_; }
 
 private:

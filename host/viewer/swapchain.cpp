@@ -80,8 +80,11 @@ bool Swapchain::recreate(vk::Extent2D framebuffer) {
     // One more than the minimum so acquiring never waits on the presentation engine's own image.
     std::uint32_t count = caps.minImageCount + 1;
     if (caps.maxImageCount > 0) count = std::min(count, caps.maxImageCount);
-    vk::SwapchainCreateInfoKHR info({}, *surface_, count, format_.format, format_.colorSpace, extent, 1,
-                                    vk::ImageUsageFlagBits::eColorAttachment | vk::ImageUsageFlagBits::eTransferDst,
+    // Transfer source where offered: --screenshot-window reads the shown image back (overlay included).
+    readable_ = static_cast<bool>(caps.supportedUsageFlags & vk::ImageUsageFlagBits::eTransferSrc);
+    vk::ImageUsageFlags usage = vk::ImageUsageFlagBits::eColorAttachment | vk::ImageUsageFlagBits::eTransferDst;
+    if (readable_) usage |= vk::ImageUsageFlagBits::eTransferSrc;
+    vk::SwapchainCreateInfoKHR info({}, *surface_, count, format_.format, format_.colorSpace, extent, 1, usage,
                                     vk::SharingMode::eExclusive, {}, caps.currentTransform,
                                     vk::CompositeAlphaFlagBitsKHR::eOpaque, presentMode_, VK_TRUE, *swapchain_);
     if (!(caps.supportedCompositeAlpha & vk::CompositeAlphaFlagBitsKHR::eOpaque)) {

@@ -37,6 +37,8 @@ public:
   vk::Image image(std::uint32_t i) const { return images_[i]; }
   vk::ImageView view(std::uint32_t i) const { return *views_[i]; }
   vk::Semaphore renderFinished(std::uint32_t i) const { return *renderFinished_[i]; }
+  // The images can be copied from (window screenshots).
+  bool readable() const { return readable_; }
 
 private:
   const vulkan::Context& context_;
@@ -44,6 +46,7 @@ private:
   vk::raii::SurfaceKHR surface_;
   vk::SurfaceFormatKHR format_;
   bool isSrgbFormat_ = false;
+  bool readable_ = false;
   vk::PresentModeKHR presentMode_ = vk::PresentModeKHR::eFifo;
   vk::Extent2D extent_;
   vk::raii::SwapchainKHR swapchain_{nullptr};

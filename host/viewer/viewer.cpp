@@ -19,6 +19,7 @@
 #include "viewer/swapchain.h"
 #include "viewer/view_settings.h"
 #include "viewer/window.h"
+#include "vk/buffer.h"
 #include "vk/compute_pipeline.h"
 #include "vk/context.h"
 
@@ -117,12 +118,15 @@ private:
   void quiesce();
   void collectStats();
   void publishStats(bool force);
-  void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex);
+  void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex, bool captureWindow);
+  bool finishesScript(const Accumulation::Step& step) const;
+  void prepareWindowCapture();
+  void saveWindowScreenshot(const std::filesystem::path& path);
   void saveScreenshot(const std::filesystem::path& path);
   void saveCamera();
   std::filesystem::path nextScreenshotPath() const;
   OverlayModel overlayModel() const;
-  void printSummary() const;
+  ViewerSummary summarize() const;
 
   const ViewerOptions& o_;
   Window& window_;
@@ -136,6 +140,7 @@ private:
   Presenter presenter_;
   FrameRing frames_;
   std::unique_ptr<Overlay> overlay_;
+  std::unique_ptr<vulkan::Buffer> windowPixels_; // --screenshot-window: the last frame as shown
   IdleOnExit idle_{context_};
 
   CameraController camera_;
@@ -150,6 +155,8 @@ private:
   std::uint32_t tracedFrames_ = 0; // scripted: frames traced at the current render size
   bool resizeRequested_ = false;
   Clock::time_point resizeRequestedAt_{};
+  vk::Extent2D windowPixelsExtent_{0, 0};
+  bool windowCaptured_ = false;
 
   // Statistics for the overlay: averages over the last interval, and totals for --stats.
   FrameTimes interval_;
@@ -315,7 +322,8 @@ void FrameLoop::publishStats(bool force) {
   window_.setTitle(title);
 }
 
-void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex) {
+void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex,
+                            bool captureWindow) {
   const vk::raii::CommandBuffer& cmd = slot.cmd;
   vulkan::vulkanStep("recording a frame", [&] {
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
@@ -335,6 +343,9 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
     frames_.stamp(cmd, FrameRing::kBlitted, vk::PipelineStageFlagBits::eTransfer);
     overlay_->record(cmd, imageIndex);
     frames_.stamp(cmd, FrameRing::kDone, vk::PipelineStageFlagBits::eBottomOfPipe);
+    if (captureWindow) {
+      Presenter::recordWindowReadback(cmd, swapchain_.image(imageIndex), swapchain_.extent(), windowPixels_->handle());
+    }
     // Screenshots and counters are read by the host (directly or through a staging copy).
     vk::MemoryBarrier toHost(vk::AccessFlagBits::eShaderWrite,
                              vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
@@ -342,6 +353,51 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
                         vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, toHost, {}, {});
     cmd.end();
   });
+}
+
+// Whether the frame about to be recorded is a scripted run's last (the loop's exit test, ahead of time).
+bool FrameLoop::finishesScript(const Accumulation::Step& step) const {
+  if (!scripted()) return false;
+  const bool wantResize = o_.resizeToWidth && o_.resizeToHeight;
+  if (wantResize && swapchain_.extent() != vk::Extent2D(*o_.resizeToWidth, *o_.resizeToHeight)) return false;
+  return tracedFrames_ + (step.count > 0 ? 1u : 0u) >= o_.frames;
+}
+
+void FrameLoop::prepareWindowCapture() {
+  if (!swapchain_.readable()) {
+    throw DeviceError("--screenshot-window: the window's images cannot be read back on " + context_.info().name);
+  }
+  const vk::Extent2D e = swapchain_.extent();
+  if (windowPixels_ && windowPixelsExtent_ == e) return;
+  quiesce(); // a frame in flight may still use the old buffer
+  windowPixels_ = std::make_unique<vulkan::Buffer>(context_, vk::DeviceSize(e.width) * e.height * 4,
+                                                   vk::BufferUsageFlagBits::eTransferDst, vulkan::MemoryUse::Readback,
+                                                   "window screenshot");
+  windowPixelsExtent_ = e;
+}
+
+void FrameLoop::saveWindowScreenshot(const std::filesystem::path& path) {
+  quiesce();
+  const vk::Format format = swapchain_.format();
+  bool bgra = format == vk::Format::eB8G8R8A8Unorm || format == vk::Format::eB8G8R8A8Srgb;
+  bool rgba = format == vk::Format::eR8G8B8A8Unorm || format == vk::Format::eR8G8B8A8Srgb;
+  if (!bgra && !rgba) {
+    throw DeviceError("--screenshot-window: cannot read the window's format " + vk::to_string(format));
+  }
+  const vk::Extent2D e = windowPixelsExtent_;
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(e.width) * e.height * 4);
+  windowPixels_->read(bytes.data(), bytes.size());
+  // The bytes are sRGB-encoded either way (the resolve pass encodes for a UNORM image, the hardware
+  // for an sRGB one); decoded here so that the PNG writer's encoding gives the same bytes back.
+  Image image(e.width, e.height);
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+    const std::uint8_t* p = &bytes[i * 4];
+    glm::vec3 encoded = bgra ? glm::vec3(p[2], p[1], p[0]) : glm::vec3(p[0], p[1], p[2]);
+    for (int c = 0; c < 3; ++c) image.pixels[i][c] = srgbToLinear(encoded[c] / 255.0f);
+  }
+  writeImage(path, image);
+  std::printf("vkray: saved the window to %s\n", path.string().c_str());
+  std::fflush(stdout);
 }
 
 void FrameLoop::saveScreenshot(const std::filesystem::path& path) {
@@ -398,31 +454,31 @@ OverlayModel FrameLoop::overlayModel() const {
   return m;
 }
 
-void FrameLoop::printSummary() const {
+ViewerSummary FrameLoop::summarize() const {
   const FrameTimes& t = total_;
-  std::printf("device: %s\n", context_.info().name.c_str());
-  std::printf("present mode: %s\n", presentModeName(swapchain_.presentMode()).c_str());
-  std::printf("render size: %ux%u\n", presenter_.size().width, presenter_.size().height);
-  std::printf("frames timed: %u\n", t.frames);
-  double frameMs = t.per(t.wallMs, t.frames);
-  std::printf("frame: %.2f ms\n", frameMs);
-  std::printf("fps: %.1f\n", frameMs > 0 ? 1000.0 / frameMs : 0.0);
-  std::printf("trace: %.2f ms\n", t.per(t.gpu.trace, t.gpuFrames));
-  std::printf("resolve: %.2f ms\n", t.per(t.gpu.resolve, t.gpuFrames));
-  std::printf("blit: %.2f ms\n", t.per(t.gpu.blit, t.gpuFrames));
-  std::printf("overlay: %.2f ms\n", t.per(t.gpu.overlay, t.gpuFrames));
-  double gpuMs = t.per(t.gpu.trace + t.gpu.resolve + t.gpu.blit + t.gpu.overlay, t.gpuFrames);
-  std::printf("gpu total: %.2f ms\n", gpuMs);
-  // On a CPU device the presentation copy to the window runs after the frame's GPU work, in series.
-  std::printf("frame minus gpu: %.2f ms\n", frameMs - gpuMs);
-  std::printf("acquire and present: %.2f ms\n", t.per(t.presentMs, t.frames));
-  std::printf("host: %.2f ms\n", t.per(t.hostMs, t.frames));
-  std::printf("wait: %.2f ms\n", t.per(t.waitMs, t.frames));
-  if (settings_.countStats) {
-    std::printf("rays per frame: %.0f\n", t.gpuFrames > 0 ? static_cast<double>(totalRays_) / t.gpuFrames : 0.0);
-    std::printf("mrays/s: %.2f\n", t.gpu.trace > 0 ? static_cast<double>(totalRays_) / (t.gpu.trace * 1e3) : 0.0);
+  ViewerSummary v;
+  v.device = context_.info().name;
+  v.presentMode = presentModeName(swapchain_.presentMode());
+  v.renderWidth = presenter_.size().width;
+  v.renderHeight = presenter_.size().height;
+  v.windowWidth = swapchain_.extent().width;
+  v.windowHeight = swapchain_.extent().height;
+  v.frames = t.frames;
+  v.frameMs = t.per(t.wallMs, t.frames);
+  v.traceMs = t.per(t.gpu.trace, t.gpuFrames);
+  v.resolveMs = t.per(t.gpu.resolve, t.gpuFrames);
+  v.blitMs = t.per(t.gpu.blit, t.gpuFrames);
+  v.overlayMs = t.per(t.gpu.overlay, t.gpuFrames);
+  v.presentMs = t.per(t.presentMs, t.frames);
+  v.hostMs = t.per(t.hostMs, t.frames);
+  v.waitMs = t.per(t.waitMs, t.frames);
+  v.rayCounts = settings_.countStats;
+  if (v.rayCounts) {
+    v.raysPerFrame = t.gpuFrames > 0 ? static_cast<double>(totalRays_) / t.gpuFrames : 0.0;
+    v.mraysPerSecond = t.gpu.trace > 0 ? static_cast<double>(totalRays_) / (t.gpu.trace * 1e3) : 0.0;
   }
-  std::printf("samples: %u\n", accumulation_.samples());
+  v.samples = accumulation_.samples();
+  return v;
 }
 
 int FrameLoop::run() {
@@ -488,7 +544,10 @@ int FrameLoop::run() {
       continue;
     }
     Accumulation::Step step = accumulation_.next(settings_.samplesPerFrame, settings_.maxSamples);
-    recordFrame(slot, step, *image);
+    const bool captureWindow = !o_.windowScreenshot.empty() && finishesScript(step);
+    if (captureWindow) prepareWindowCapture();
+    recordFrame(slot, step, *image, captureWindow);
+    windowCaptured_ = windowCaptured_ || captureWindow;
     frames_.submit(swapchain_.renderFinished(*image));
     auto presentStart = Clock::now();
     if (!swapchain_.present(*image, swapchain_.renderFinished(*image))) swapchainStale_ = true;
@@ -535,14 +594,46 @@ int FrameLoop::run() {
                       " message(s); no screenshot written");
   }
   if (scripted() && !o_.screenshot.empty()) saveScreenshot(o_.screenshot);
-  if (o_.printStats) printSummary();
+  if (windowCaptured_) saveWindowScreenshot(o_.windowScreenshot);
+  const ViewerSummary summary = summarize();
+  if (o_.printStats) printViewerSummary(summary);
+  if (o_.summary) *o_.summary = summary;
   return 0;
 }
 
 } // namespace
 
+void printViewerSummary(const ViewerSummary& v) {
+  std::printf("device: %s\n", v.device.c_str());
+  std::printf("present mode: %s\n", v.presentMode.c_str());
+  std::printf("render size: %ux%u\n", v.renderWidth, v.renderHeight);
+  std::printf("window size: %ux%u\n", v.windowWidth, v.windowHeight);
+  std::printf("frames timed: %u\n", v.frames);
+  std::printf("frame: %.2f ms\n", v.frameMs);
+  std::printf("fps: %.1f\n", v.fps());
+  std::printf("trace: %.2f ms\n", v.traceMs);
+  std::printf("resolve: %.2f ms\n", v.resolveMs);
+  std::printf("blit: %.2f ms\n", v.blitMs);
+  std::printf("overlay: %.2f ms\n", v.overlayMs);
+  std::printf("gpu total: %.2f ms\n", v.gpuMs());
+  // On a CPU device the presentation copy to the window runs after the frame's GPU work, in series.
+  std::printf("frame minus gpu: %.2f ms\n", v.frameMs - v.gpuMs());
+  std::printf("acquire and present: %.2f ms\n", v.presentMs);
+  std::printf("host: %.2f ms\n", v.hostMs);
+  std::printf("wait: %.2f ms\n", v.waitMs);
+  if (v.rayCounts) {
+    std::printf("rays per frame: %.0f\n", v.raysPerFrame);
+    std::printf("mrays/s: %.2f\n", v.mraysPerSecond);
+  }
+  std::printf("samples: %u\n", v.samples);
+}
+
 int runViewer(const ViewerOptions& o) {
   if (!o.screenshot.empty()) checkOutputPath(o.screenshot);
+  if (!o.windowScreenshot.empty()) {
+    if (o.frames == 0) throw InputError("--screenshot-window", "needs --frames (it is for scripted runs)");
+    checkOutputPath(o.windowScreenshot);
+  }
   // The scene loads before any window opens: a broken file stops here with its one-line error.
   SceneWatcher watcher(o.scene);
   GlfwSession glfw;

@@ -14,6 +14,29 @@
 
 namespace vkray {
 
+// Per-frame averages of a scripted run (warm-up frames left out), for --stats and `bench view`.
+struct ViewerSummary {
+  std::string device;
+  std::string presentMode;
+  std::uint32_t renderWidth = 0, renderHeight = 0;
+  std::uint32_t windowWidth = 0, windowHeight = 0;
+  std::uint32_t frames = 0; // frames timed
+  double frameMs = 0.0;     // wall time between frames
+  double traceMs = 0.0;     // GPU (timestamps): the Renderer's dispatch
+  double resolveMs = 0.0;   // GPU: sums copied to an image and resolved to display colour
+  double blitMs = 0.0;      // GPU: blit to the swapchain image
+  double overlayMs = 0.0;   // GPU: the overlay's render pass
+  double presentMs = 0.0;   // CPU: in acquire and present (on lavapipe this includes waiting for the GPU)
+  double hostMs = 0.0;      // CPU: the frame loop itself (input, overlay UI, recording, submission)
+  double waitMs = 0.0;      // CPU: blocked on frame fences
+  bool rayCounts = false;
+  double raysPerFrame = 0.0;
+  double mraysPerSecond = 0.0; // rays / trace time
+  std::uint32_t samples = 0;   // samples per pixel at the end
+  double fps() const { return frameMs > 0 ? 1000.0 / frameMs : 0.0; }
+  double gpuMs() const { return traceMs + resolveMs + blitMs + overlayMs; }
+};
+
 struct ViewerOptions {
   std::filesystem::path scene;
   // Command-line overrides of the scene's settings, re-applied after every reload.
@@ -41,8 +64,13 @@ struct ViewerOptions {
   std::optional<std::uint32_t> resizeToHeight;
   double spinDegrees = 0.0; // orbit the camera by this much per frame (benchmarks)
   bool printStats = false;  // timing summary as `name: value` lines at exit
+  // Scripted: the window's last frame as shown (overlay included), read back from the swapchain image.
+  std::filesystem::path windowScreenshot;
+  ViewerSummary* summary = nullptr; // filled at exit when set
 };
 
 int runViewer(const ViewerOptions& options);
+// The summary as `name: value` lines on stdout (--stats).
+void printViewerSummary(const ViewerSummary& summary);
 
 } // namespace vkray
