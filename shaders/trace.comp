@@ -27,6 +27,7 @@ uint gStackOverflow = 0u;
 uint gMaxDepth = 0u;
 uint gRefinedPixels = 0u;
 uint gNonFinite = 0u;
+uint gTruncated = 0u; // counted even without COUNT_STATS: a cut-short tree is a wrong pixel
 
 const uint kRayEye = 0u;
 const uint kRayReflection = 1u;
@@ -68,6 +69,12 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   int sp = 0;
   PendingRay cur = PendingRay(origin, kRayEye << 16u, dir, vec3(1.0), kEmptyMedia);
   uint maxDepth = opaqueUniform(frame.imageSize.w);
+  // The loop's own exit leaves nothing pending. llvmpipe ends every loop of an invocation once its
+  // SIMD group has run 65535 loop iterations in all; a tree cut short that way still has its
+  // current ray or stacked branches, and the sample is counted as truncated instead of passing
+  // silently as a darker pixel. (A flag set before the break would be folded away by the compiler,
+  // which cannot know of the limit.)
+  bool haveNext = true;
   while (true) {
     uint depth = cur.depthKind & 0xFFFFu;
     countRay(cur.depthKind >> 16u, depth);
@@ -77,7 +84,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
     uint medium = REFRACTION ? mediaTop(cur.media) : kNoMedium;
     if (REFRACTION && medium != kNoMedium) w *= beerLambert(loadMaterial(medium).absorption.rgb, hit.t);
 
-    bool haveNext = false;
+    haveNext = false;
     if (hit.kind == kNoHit) {
       radiance += w * frame.background.rgb;
     } else {
@@ -149,8 +156,10 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
       // Without refraction nothing is ever pushed: the stack code compiles out.
       if (!REFRACTION || sp == 0) break;
       cur = stack[--sp];
+      haveNext = true;
     }
   }
+  gTruncated += uint(haveNext || sp != 0);
   return radiance;
 }
 
@@ -212,6 +221,7 @@ bool needsRefinement(uvec2 pixel) {
   }
 
 void flushStats() {
+  ADD_COUNTER(gTruncated, truncated);
   if (!COUNT_STATS) return;
   ADD_COUNTER(gEyeRays, eyeRays);
   ADD_COUNTER(gShadowRays, shadowRays);
@@ -236,12 +246,16 @@ void main() {
     uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
     uint slot = (pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x;
     if (opaqueUniform(pc.pass) == kPassRefine) {
-      // Refined pixels get spp fresh samples; the others keep their base sample.
+      // Refined pixels get spp fresh samples; the others keep their base sample. The host may
+      // split the samples over several dispatches; the later ones accumulate (refined pixels only).
+      bool accumulate = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u;
       if (needsRefinement(pixel)) {
-        if (COUNT_STATS) gRefinedPixels++;
-        image[slot] = vec4(sampleSum(pixel, index, pc.sampleBase, opaqueUniform(pc.sampleCount), false),
+        if (COUNT_STATS && !accumulate) gRefinedPixels++;
+        vec4 result = vec4(sampleSum(pixel, index, pc.sampleBase, opaqueUniform(pc.sampleCount), false),
                            float(pc.sampleCount));
-      } else {
+        if (accumulate) result += image[slot];
+        image[slot] = result;
+      } else if (!accumulate) {
         image[slot] = prevPixel(pixel);
       }
     } else {

@@ -8,6 +8,7 @@
 
 #include "reference.h"
 #include "render/probe.h"
+#include "scene/scene_loader.h"
 #include "test_support.h"
 
 namespace vkray::test {
@@ -296,6 +297,28 @@ TEST(RenderRefraction, DeepTreeNeverOverflowsAndDepthOnlyChangesGlassPixels) {
     }
   }
   EXPECT_GT(changed, 200);
+}
+
+// llvmpipe (lavapipe) ends every loop of an invocation once its SIMD group has run 65535 loop
+// iterations in all. The glass scene at depth 16 without bailout makes trees of up to 2^16
+// branches per sample: the driver cuts them short, and the kernel must say so (`truncated`, counted
+// even without statistics) rather than return a silently darker pixel. A bailout of 1e-6 keeps the
+// tree small enough, and samples split into one dispatch each keep spp from adding up to the limit.
+TEST(RenderRefraction, TreesCutShortByTheDriverAreCounted) {
+  if (gpu().info().name.find("llvmpipe") == std::string::npos) GTEST_SKIP() << "the loop limit is llvmpipe's";
+  Scene s = loadScene(scenePath("glass.json"));
+  s.render.width = 80;
+  s.render.height = 60;
+  s.render.maxDepth = 16;
+  s.render.bailout = 0.0;
+  RenderOptions quiet;
+  quiet.countStats = false;
+  RenderResult cut = render(s, quiet);
+  EXPECT_GT(cut.stats.truncated, 0u);
+  s.render.bailout = 1e-6;
+  s.render.spp = 4;
+  RenderResult whole = render(s, quiet);
+  EXPECT_EQ(whole.stats.truncated, 0u);
 }
 
 // A stack too small for the tree drops branches and counts them instead of corrupting anything.

@@ -48,7 +48,7 @@ struct BenchSpecializeArgs {
 int runBenchSpecialize(const BenchSpecializeArgs& args);
 
 struct BenchAccuracyArgs {
-  std::vector<std::filesystem::path> scenes; // default: showcase, glass, seed
+  std::vector<std::filesystem::path> scenes; // default: showcase, glass, seed and two hard cases
   std::filesystem::path out = "accuracy";
   DeviceFlags device;
   int runs = 5;

@@ -55,6 +55,8 @@ int main(int argc, char** argv) {
 
   ViewArgs view;
   auto* viewCmd = addViewCommand(app, view);
+  BenchViewArgs benchView;
+  auto* benchViewCmd = addBenchViewCommand(*benchCmd, benchView);
 
   BenchMeshesArgs benchMeshes;
   auto* benchMeshesCmd =
@@ -69,7 +71,7 @@ int main(int argc, char** argv) {
 
   BenchAccuracyArgs benchAcc;
   auto* benchAccCmd = benchCmd->add_subcommand("accuracy", "error against time for every accuracy knob");
-  benchAccCmd->add_option("scenes", benchAcc.scenes, "scene files (default: showcase, glass, seed)");
+  benchAccCmd->add_option("scenes", benchAcc.scenes, "scene files (default: showcase, glass, seed, numerics-cracks, numerics-far-sphere)");
   benchAccCmd->add_option("--out", benchAcc.out, "output directory (CSV, reference and heat-map images)");
   benchAccCmd->add_option("--runs", benchAcc.runs, "timed runs per point")->check(CLI::Range(1, 1000));
   benchAccCmd->add_option("--height", benchAcc.height, "image height (aspect kept)")->check(CLI::Range(8, 4096));
@@ -82,7 +84,15 @@ int main(int argc, char** argv) {
   auto* infoCmd = app.add_subcommand("info", "list Vulkan devices and the features vkray uses");
   infoCmd->add_option("--device", infoFlags.device, "also create a context on this device")->envname("VKRAY_DEVICE");
 
-  CLI11_PARSE(app, argc, argv);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    // --help prints as CLI11 does; a bad command line is one line and exit 1 like every other
+    // error ("vkray: error: --spp: Value 4097 not in range 1 to 4096").
+    if (e.get_exit_code() == 0) return app.exit(e);
+    std::fprintf(stderr, "vkray: error: %s\n", e.what());
+    return 1;
+  }
 
   try {
     if (*renderCmd) return runRender(render);
@@ -92,6 +102,7 @@ int main(int argc, char** argv) {
     if (*benchAccCmd) return runBenchAccuracy(benchAcc);
     if (*benchMeshesCmd) return runBenchMeshes(benchMeshes);
     if (*benchSpecCmd) return runBenchSpecialize(benchSpec);
+    if (*benchViewCmd) return runBenchView(benchView);
   } catch (const CancelledError&) {
     std::fprintf(stderr, "vkray: interrupted; no output written\n");
     return 130;

@@ -106,6 +106,13 @@ int runRender(const RenderArgs& args) {
                  static_cast<unsigned long long>(result.stats.nonFinite));
   }
 
+  if (result.stats.truncated > 0) {
+    std::fprintf(stderr,
+                 "vkray: warning: %llu samples were cut short by the driver's loop limit (llvmpipe stops a "
+                 "shader after 65535 loop iterations): raise render.bailout or lower max_depth\n",
+                 static_cast<unsigned long long>(result.stats.truncated));
+  }
+
   auto tw = Clock::now();
   writeImage(args.output, result.image);
   double writeMs = msSince(tw);
@@ -121,6 +128,10 @@ int runRender(const RenderArgs& args) {
     for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
     std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers" : "storage buffers");
     printStat("load", loadMs);
+    for (const MeshInfo& m : scene.meshes) {
+      std::printf("mesh %s: %zu triangles, %zu degenerate dropped\n", m.file.c_str(), m.triangleCount,
+                  m.droppedDegenerate);
+    }
     if (renderer.gpuScene().bvh.stats.nodes > 0) {
       const auto& b = renderer.gpuScene().bvh.stats;
       printStat("bvh build", b.buildMs);
@@ -151,6 +162,7 @@ int runRender(const RenderArgs& args) {
     std::printf("rays: %llu\n", static_cast<unsigned long long>(s.total()));
     std::printf("bailout saved: %llu\n", static_cast<unsigned long long>(s.bailoutSaved));
     std::printf("stack overflow: %llu\n", static_cast<unsigned long long>(s.stackOverflow));
+    std::printf("truncated samples: %llu\n", static_cast<unsigned long long>(s.truncated));
     std::printf("refined pixels: %llu\n", static_cast<unsigned long long>(s.refinedPixels));
     std::printf("deepest bounce: %u\n", s.maxDepth);
     double seconds = result.timings.traceMs * 1e-3;

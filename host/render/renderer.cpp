@@ -51,6 +51,7 @@ RayStats& RayStats::operator+=(const RayStats& o) {
   stackOverflow += o.stackOverflow;
   refinedPixels += o.refinedPixels;
   nonFinite += o.nonFinite;
+  truncated += o.truncated;
   maxDepth = std::max(maxDepth, o.maxDepth);
   return *this;
 }
@@ -271,11 +272,32 @@ void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::
                               const gpu::PushConstants& push, bool timestamps) {
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, pipeline.handle());
   cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
-  cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, push);
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *queryPool_, 0);
-  // Round up: the last partial workgroup covers the remaining pixels, the shader bounds-checks.
-  cmd.dispatch((push.tileSize.x + gpu::kWorkgroupSizeX - 1) / gpu::kWorkgroupSizeX,
-               (push.tileSize.y + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY, 1);
+  // One dispatch per sample, each adding to the sums of the one before. llvmpipe (lavapipe) stops
+  // every loop of an invocation once the loops of its SIMD group have run 65535 iterations in all
+  // (LP_MAX_TGSI_LOOP_ITERATIONS, shared by all loops of a shader): 64 samples of a deep glass tree
+  // in one invocation reach that and lose their last samples without a trace. A dispatch per
+  // sample gives each sample the whole budget; the sums are added in the same order as the
+  // shader's own sample loop, so the image is bit for bit the same.
+  std::uint32_t dispatches = std::max(1u, push.sampleCount);
+  for (std::uint32_t k = 0; k < dispatches; ++k) {
+    gpu::PushConstants one = push;
+    if (push.sampleCount > 1) {
+      one.sampleBase = push.sampleBase + k;
+      one.sampleCount = 1;
+      if (k > 0) {
+        one.flags |= gpu::kFlagAccumulate;
+        vk::MemoryBarrier sums(vk::AccessFlagBits::eShaderWrite,
+                               vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {},
+                            sums, {}, {});
+      }
+    }
+    cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, one);
+    // Round up: the last partial workgroup covers the remaining pixels, the shader bounds-checks.
+    cmd.dispatch((push.tileSize.x + gpu::kWorkgroupSizeX - 1) / gpu::kWorkgroupSizeX,
+                 (push.tileSize.y + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY, 1);
+  }
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *queryPool_, 1);
 }
 
@@ -293,6 +315,7 @@ RayStats Renderer::readStatsAndReset() {
   s.stackOverflow = raw.stackOverflow;
   s.refinedPixels = raw.refinedPixels;
   s.nonFinite = raw.nonFinite;
+  s.truncated = raw.truncated;
   s.maxDepth = raw.maxDepth;
   return s;
 }
@@ -317,6 +340,10 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
   auto traceStart = Clock::now();
   double rowsPerMs = 0.0; // measured speed, drives the band height
 
+  // The refine pass decides from the base pass's image, with a row of neighbours across each band
+  // edge: it reads a copy, so rows refined by the band above do not change the decisions of the next
+  // band, and the image does not depend on where the bands split.
+  Image baseImage;
   auto runPass = [&](bool refine) {
     std::uint32_t y = 0;
     std::uint32_t rows =
@@ -341,7 +368,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
         std::vector<glm::vec4> rowsData(static_cast<std::size_t>(width) * (p1 - p0));
         for (std::uint32_t r = p0; r < p1; ++r) {
           for (std::uint32_t x = 0; x < width; ++x) {
-            rowsData[static_cast<std::size_t>(r - p0) * width + x] = glm::vec4(result.image.at(x, r), 1.0f);
+            rowsData[static_cast<std::size_t>(r - p0) * width + x] = glm::vec4(baseImage.at(x, r), 1.0f);
           }
         }
         prevImage_->write(rowsData.data(), rowsData.size() * sizeof(glm::vec4));
@@ -388,7 +415,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       result.timings.traceMs += bandGpuMs;
       result.timings.traceWallMs += bandWallMs;
       ++result.timings.bands;
-      if (options.countStats) result.stats += readStatsAndReset();
+      // Without countStats only `truncated` is counted; the other counters stay 0.
+      result.stats += readStatsAndReset();
       rowsPerMs = static_cast<double>(rows) / std::max(bandGpuMs, 1e-3);
 
       auto readStart = Clock::now();
@@ -415,7 +443,10 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
     }
   };
   runPass(false);
-  if (adaptive) runPass(true);
+  if (adaptive) {
+    baseImage = result.image;
+    runPass(true);
+  }
   return result;
 }
 

@@ -32,6 +32,7 @@ struct RayStats {
   std::uint64_t stackOverflow = 0; // branches dropped because the explicit stack was full
   std::uint64_t refinedPixels = 0; // adaptive antialiasing: pixels supersampled
   std::uint64_t nonFinite = 0;     // samples that were NaN/Inf before the guard (expected 0)
+  std::uint64_t truncated = 0;     // samples the driver cut short (llvmpipe's loop limit); counted always
   std::uint32_t maxDepth = 0;      // deepest bounce traced
 
   std::uint64_t total() const { return eye + shadow + reflection + refraction; }
