@@ -1,7 +1,8 @@
 // libFuzzer target: a scene file's text through everything the host does with it before the GPU
 // (load and validate, analyse, pack with a BVH). Any input must either load or be refused with
 // vkray::InputError; a crash, a sanitizer report, a hang or any other exception is a bug.
-// Relative "base" scenes and mesh files resolve against fuzz/data.
+// Relative "base" scenes and mesh files resolve against the bundled scenes/ (seed.json,
+// meshes/knot.obj, ...), as they do for the seed corpus (tools/run-fuzz).
 #include <cstddef>
 #include <cstdint>
 #include <string>

@@ -86,9 +86,30 @@ const char* kTriangleGltf = R"({
                  { "bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR" } ]
 })";
 
-// True if the message is one printable line (no newline or other control character).
+// True if the bytes are well-formed UTF-8 (continuation bytes where the lead byte says; the
+// finer overlong and surrogate rules are the loader's to keep, this checks the structure).
+bool structurallyUtf8(const std::string& s) {
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    auto b = static_cast<unsigned char>(s[i]);
+    std::size_t n = b < 0x80                 ? 0
+                    : b >= 0xc2 && b <= 0xdf ? 1
+                    : b >= 0xe0 && b <= 0xef ? 2
+                    : b >= 0xf0 && b <= 0xf4 ? 3
+                                             : 9;
+    if (n == 9 || i + n >= s.size() + (n == 0)) return false; // an invalid lead, or cut short
+    for (std::size_t k = 1; k <= n; ++k) {
+      if ((static_cast<unsigned char>(s[i + k]) & 0xc0) != 0x80) return false;
+    }
+    i += n;
+  }
+  return true;
+}
+
+// True if the message is one printable line: no newline or other control character, and text
+// (UTF-8) a terminal shows as it is, even when the input was binary garbage.
 bool oneLine(const std::string& s) {
-  return std::none_of(s.begin(), s.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
+  return structurallyUtf8(s) &&
+         std::none_of(s.begin(), s.end(), [](char c) { return static_cast<unsigned char>(c) < 0x20 || c == 0x7f; });
 }
 
 // A value of the valid scene that a test replaces: where it is, and how messages name it.
@@ -199,14 +220,13 @@ TEST_F(HardeningScene, WrongTypesAreRefusedAtEveryField) {
   int refused = 0;
   for (const Site* site : leaves) {
     for (const json& value : wrong) {
-      if (value.type() == site->value->type() ||
-          (value.is_number() && site->value->is_number())) {
+      if (value.type() == site->value->type() || (value.is_number() && site->value->is_number())) {
         continue; // not a wrong type
       }
       SCOPED_TRACE(site->path + " = " + value.dump());
       // An object where a material name is expected is an inline material: valid.
-      bool inlineMaterial = value.is_object() && site->path.size() >= 9 &&
-                            site->path.compare(site->path.size() - 9, 9, ".material") == 0;
+      bool inlineMaterial =
+          value.is_object() && site->path.size() >= 9 && site->path.compare(site->path.size() - 9, 9, ".material") == 0;
       if (inlineMaterial) {
         EXPECT_EQ(load(replaced(*site, value)), std::nullopt);
         continue;
@@ -228,7 +248,9 @@ TEST_F(HardeningScene, EmptyContainersLoadOrAreRefusedAtTheirPath) {
       auto message = load(text);
       if (!message) continue; // e.g. "objects": [], "render": {}: valid
       ++refused;
-      EXPECT_NE(message->find("test.json: " + site->path + ": "), std::string::npos) << *message;
+      // Emptied materials leave the objects that name one dangling: reported at the reference.
+      bool atReference = site->path == "materials" && message->find(".material: unknown material") != std::string::npos;
+      EXPECT_TRUE(atReference || message->find("test.json: " + site->path + ": ") != std::string::npos) << *message;
       EXPECT_TRUE(oneLine(*message)) << *message;
     }
   }
@@ -321,8 +343,8 @@ TEST_F(HardeningScene, TenMillionObjectsAreRefusedOnSize) {
   text += '}';
   auto message = load(text);
   ASSERT_TRUE(message.has_value());
-  EXPECT_NE(message->find("test.json: file too large to be a scene (" + std::to_string(text.size()) + " bytes; at most " +
-                          std::to_string(kMaxSceneFileBytes) + ")"),
+  EXPECT_NE(message->find("test.json: file too large to be a scene (" + std::to_string(text.size()) +
+                          " bytes; at most " + std::to_string(kMaxSceneFileBytes) + ")"),
             std::string::npos)
       << *message;
 }
@@ -413,7 +435,7 @@ TEST(HardeningFuzz, FindingsStayFixed) {
     SCOPED_TRACE(entry.path().string());
     try {
       if (target == "scene") {
-        Scene scene = loadSceneFromString(bytes, "fuzz.json", VKRAY_SOURCE_DIR "/fuzz/data");
+        Scene scene = loadSceneFromString(bytes, "fuzz.json", VKRAY_SOURCE_DIR "/scenes");
         Features f = analyzeScene(scene, scene.render);
         packScene(scene, scene.camera.position, f.useBvh);
       } else {

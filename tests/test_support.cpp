@@ -1,6 +1,7 @@
 // Shared GPU context, renderer and helpers for the tests (see test_support.h).
 #include "test_support.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <memory>
 
@@ -20,8 +21,7 @@ vulkan::Context& gpu() {
     const char* device = std::getenv("VKRAY_TEST_DEVICE");
     options.device = device && *device ? device : "llvmpipe";
     options.validation = true;
-    const char* sync = std::getenv("VKRAY_SYNC_VALIDATION");
-    options.synchronizationValidation = sync && std::string(sync) == "1";
+    options.synchronizationValidation = syncValidationRequested();
     options.echoValidation = true;
     return std::make_unique<vulkan::Context>(options);
   }();
@@ -52,6 +52,19 @@ void expectNoValidationMessages() {
     ADD_FAILURE() << "validation layer: " << messages[i];
   }
   gSeenMessages = messages.size();
+}
+
+std::vector<std::string> takeValidationMessages() {
+  auto messages = gpu().validationMessages();
+  std::vector<std::string> fresh(
+      messages.begin() + static_cast<std::ptrdiff_t>(std::min(gSeenMessages, messages.size())), messages.end());
+  gSeenMessages = messages.size();
+  return fresh;
+}
+
+bool syncValidationRequested() {
+  const char* sync = std::getenv("VKRAY_SYNC_VALIDATION");
+  return sync && std::string(sync) == "1";
 }
 
 std::string scenePath(const std::string& name) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -27,6 +28,13 @@ RenderResult render(const Scene& scene, RenderOptions options = {});
 
 // Fails the current test if the validation layer reported anything since the last check.
 void expectNoValidationMessages();
+
+// The validation layer's messages since the last check, which then count as seen (for a test that
+// provokes messages on purpose).
+std::vector<std::string> takeValidationMessages();
+
+// True when the suite runs with synchronization validation (VKRAY_SYNC_VALIDATION=1).
+bool syncValidationRequested();
 
 // Where the bundled scenes live (the source tree's scenes/).
 std::string scenePath(const std::string& name);

@@ -32,14 +32,41 @@ double srgbToLinear(double c) {
   return c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
 }
 
-// Messages are one line: control characters that a key, a name or a file name brings in are
-// written as escapes ("\n", "\x1b").
+// Length of the well-formed UTF-8 sequence at s[i] (RFC 3629: no overlong forms, no surrogates,
+// nothing past U+10FFFF), or 0 if the bytes there are not one.
+std::size_t utf8Length(const std::string& s, std::size_t i) {
+  auto at = [&](std::size_t k) { return i + k < s.size() ? static_cast<unsigned char>(s[i + k]) : 0u; };
+  unsigned b0 = at(0);
+  std::size_t n = b0 >= 0xc2 && b0 <= 0xdf ? 2 : b0 >= 0xe0 && b0 <= 0xef ? 3 : b0 >= 0xf0 && b0 <= 0xf4 ? 4 : 0;
+  if (n == 0) return 0;
+  // The second byte's range depends on the first (Unicode Table 3-7).
+  unsigned lo = b0 == 0xe0 ? 0xa0 : b0 == 0xf0 ? 0x90 : 0x80;
+  unsigned hi = b0 == 0xed ? 0x9f : b0 == 0xf4 ? 0x8f : 0xbf;
+  if (at(1) < lo || at(1) > hi) return 0;
+  for (std::size_t k = 2; k < n; ++k) {
+    if (at(k) < 0x80 || at(k) > 0xbf) return 0;
+  }
+  return n;
+}
+
+// Messages are one line of text: control characters that a key, a name or a file name brings in,
+// and bytes that are not UTF-8, are written as escapes ("\n", "\x1b", "\xe9").
 std::string printable(const std::string& s) {
   std::string out;
   out.reserve(s.size());
-  for (char c : s) {
+  for (std::size_t i = 0; i < s.size(); ++i) {
+    char c = s[i];
     auto u = static_cast<unsigned char>(c);
-    if (c == '\n') {
+    if (u >= 0x80) {
+      if (std::size_t n = utf8Length(s, i)) {
+        out.append(s, i, n);
+        i += n - 1;
+      } else {
+        char hex[8];
+        std::snprintf(hex, sizeof hex, "\\x%02x", u);
+        out += hex;
+      }
+    } else if (c == '\n') {
       out += "\\n";
     } else if (c == '\r') {
       out += "\\r";
@@ -60,19 +87,26 @@ std::string printable(const std::string& s) {
 // vertex is at 4); the cap keeps nlohmann's recursive operations (copy, merge_patch for "base",
 // destruction) far from the stack's end and stops a hostile file before it is built.
 constexpr int kMaxJsonDepth = 64;
-struct TooDeep {};
 
-// Where the nesting first goes deeper than kMaxJsonDepth: the byte offset, skipping strings.
+// Where the nesting first goes deeper than kMaxJsonDepth: the byte offset (text.size() if it never
+// does), skipping strings and comments.
 std::size_t tooDeepAt(const std::string& text) {
   int depth = 0;
   bool inString = false;
   for (std::size_t i = 0; i < text.size(); ++i) {
     char c = text[i];
     if (inString) {
-      if (c == '\\') ++i;
-      else if (c == '"') inString = false;
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        inString = false;
     } else if (c == '"') {
       inString = true;
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+      i = std::min(text.find('\n', i), text.size());
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+      auto end = text.find("*/", i + 2);
+      i = end == std::string::npos ? text.size() : end + 1;
     } else if (c == '[' || c == '{') {
       if (++depth > kMaxJsonDepth) return i;
     } else if (c == ']' || c == '}') {
@@ -98,20 +132,15 @@ std::string formatNumber(double v) {
 }
 
 nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
-  // Called at every value; refuses an object or array opened kMaxJsonDepth levels down.
-  auto limitDepth = [](int depth, nlohmann::json::parse_event_t event, nlohmann::json&) {
-    if ((event == nlohmann::json::parse_event_t::object_start ||
-         event == nlohmann::json::parse_event_t::array_start) &&
-        depth >= kMaxJsonDepth) {
-      throw TooDeep{};
-    }
-    return true;
-  };
-  try {
-    return nlohmann::json::parse(text, limitDepth, /*allow_exceptions=*/true, /*ignore_comments=*/true);
-  } catch (const TooDeep&) {
-    throw InputError(printable(file) + ":" + lineAndColumn(text, tooDeepAt(text)),
+  // Nesting is checked by a scan before parsing, not by a parser callback: nlohmann's callback
+  // parser looks through the whole enclosing array at the end of every object (3.11), which makes
+  // an array of n objects cost O(n^2) (ten million "{}" took hours).
+  if (std::size_t deep = tooDeepAt(text); deep < text.size()) {
+    throw InputError(printable(file) + ":" + lineAndColumn(text, deep),
                      "invalid JSON: nested more than " + std::to_string(kMaxJsonDepth) + " levels deep");
+  }
+  try {
+    return nlohmann::json::parse(text, nullptr, /*allow_exceptions=*/true, /*ignore_comments=*/true);
   } catch (const nlohmann::json::parse_error& e) {
     // e.byte is 1-based and points just past the offending character.
     std::size_t byte = e.byte > 0 ? std::min<std::size_t>(e.byte - 1, text.size()) : 0;
@@ -129,7 +158,8 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
     // e.g. "number overflow parsing '1e400'": a number no double can hold.
     std::string what = e.what();
     auto close = what.find("] ");
-    throw InputError(printable(file), "invalid JSON: " + printable(close == std::string::npos ? what : what.substr(close + 2)));
+    throw InputError(printable(file),
+                     "invalid JSON: " + printable(close == std::string::npos ? what : what.substr(close + 2)));
   }
 }
 
