@@ -190,8 +190,10 @@ TEST_F(Cli, AccuracyBenchQuickWritesACsvAndPlots) {
     std::size_t fields = 1;
     bool quoted = false;
     for (char c : line) {
-      if (c == '"') quoted = !quoted;
-      else if (c == ',' && !quoted) ++fields;
+      if (c == '"')
+        quoted = !quoted;
+      else if (c == ',' && !quoted)
+        ++fields;
     }
     EXPECT_EQ(fields, columns) << line;
     EXPECT_EQ(line.find("nan"), std::string::npos) << line;

@@ -64,9 +64,7 @@ struct Prim {
   V4 lo;
   V4 hi;
   V4 centroid2() const { return lo + hi; } // twice the centre: binning is scale invariant
-  std::uint32_t ref() const {
-    return static_cast<std::uint32_t>(lo[3]) | static_cast<std::uint32_t>(hi[3]) << 16;
-  }
+  std::uint32_t ref() const { return static_cast<std::uint32_t>(lo[3]) | static_cast<std::uint32_t>(hi[3]) << 16; }
   void setRef(std::uint32_t r) {
     lo[3] = static_cast<float>(r & 0xFFFFu);
     hi[3] = static_cast<float>(r >> 16);
@@ -196,8 +194,8 @@ struct Builder {
   // Small nodes use fewer bins: initialising and sweeping bins would cost more than the binning.
   Split findSplit(const Range& r) const {
     const std::size_t n = r.size();
-    const int nb = static_cast<int>(std::min<std::size_t>(static_cast<std::size_t>(std::clamp(options.bins, 2, kMaxBins)),
-                                                          std::max<std::size_t>(n, 2)));
+    const int nb = static_cast<int>(std::min<std::size_t>(
+        static_cast<std::size_t>(std::clamp(options.bins, 2, kMaxBins)), std::max<std::size_t>(n, 2)));
     Split best;
     best.bins = nb;
     V4 extent = r.centroids.hi - r.centroids.lo;
@@ -415,8 +413,8 @@ Bvh buildBvh(const std::vector<BvhPrimitive>& primitives, const BvhOptions& opti
   bvh.stats.primitives = primitives.size();
   if (!primitives.empty()) {
     // The depth cap holds for any count that fits: maxLeafSize << (maxDepth - 1) primitives.
-    if (options.maxDepth <= 40 && primitives.size() > (static_cast<std::size_t>(options.maxLeafSize)
-                                                       << (options.maxDepth - 1))) {
+    if (options.maxDepth <= 40 &&
+        primitives.size() > (static_cast<std::size_t>(options.maxLeafSize) << (options.maxDepth - 1))) {
       throw Error("BVH: " + std::to_string(primitives.size()) + " primitives cannot fit a tree of depth " +
                   std::to_string(options.maxDepth) + " with leaves of " + std::to_string(options.maxLeafSize));
     }
@@ -461,8 +459,8 @@ std::string checkBvh(const Bvh& bvh, const std::vector<BvhPrimitive>& primitives
   if (primitives.empty()) return bvh.nodes.empty() && bvh.primRefs.empty() ? "" : "nodes for an empty input";
   if (bvh.nodes.empty()) return "no nodes";
   if (bvh.primRefs.size() != primitives.size()) {
-    return "primRefs has " + std::to_string(bvh.primRefs.size()) + " entries for " +
-           std::to_string(primitives.size()) + " primitives";
+    return "primRefs has " + std::to_string(bvh.primRefs.size()) + " entries for " + std::to_string(primitives.size()) +
+           " primitives";
   }
   // The same reference may stand for only one primitive in the input; map it back.
   std::vector<std::size_t> seen(primitives.size(), 0);

@@ -39,8 +39,8 @@ struct Aabb {
 };
 
 struct BvhPrimitive {
-  Aabb bounds;            // must be finite (buildBvh throws otherwise)
-  std::uint32_t ref = 0;  // kind << kPrimKindShift | index, as in PrimRefs[]
+  Aabb bounds;           // must be finite (buildBvh throws otherwise)
+  std::uint32_t ref = 0; // kind << kPrimKindShift | index, as in PrimRefs[]
 };
 
 struct BvhOptions {

@@ -39,7 +39,8 @@ MeshData proceduralTorus(std::size_t triangles) {
     for (std::size_t j = 0; j < v; ++j) {
       double b = 2.0 * M_PI * static_cast<double>(j) / static_cast<double>(v);
       // Bumps at two scales, so that small triangles still see curvature.
-      double r = tubeRadius * (1.0 + 0.12 * std::sin(7.0 * a) * std::sin(5.0 * b) + 0.03 * std::sin(41.0 * a + 3.0 * b));
+      double r =
+          tubeRadius * (1.0 + 0.12 * std::sin(7.0 * a) * std::sin(5.0 * b) + 0.03 * std::sin(41.0 * a + 3.0 * b));
       mesh.positions.emplace_back((ringRadius + r * std::cos(b)) * std::cos(a), r * std::sin(b),
                                   (ringRadius + r * std::cos(b)) * std::sin(a));
     }
@@ -108,8 +109,8 @@ struct Row {
   std::size_t nodes = 0;
   int depth = 0;
   double bytesPerTriangle = 0.0;
-  double primaryMs = 0.0; // GPU time of eye rays + shading
-  double shadowMs = 0.0;  // GPU time the shadow rays add
+  double primaryMs = 0.0;    // GPU time of eye rays + shading
+  double shadowMs = 0.0;     // GPU time the shadow rays add
   double primaryCpuMs = 0.0; // process CPU time of the same (lavapipe: all worker threads)
   double shadowCpuMs = 0.0;
   std::uint64_t eyeRays = 0;
@@ -125,9 +126,7 @@ struct Row {
   double primaryMrays() const { return primaryMs > 0 ? eyeRays / (primaryMs * 1e3) : 0.0; }
   double shadowMrays() const { return shadowMs > 0 ? shadowRays / (shadowMs * 1e3) : 0.0; }
   double embreePrimaryMrays() const { return embreePrimaryMs > 0 ? eyeRays / (embreePrimaryMs * 1e3) : 0.0; }
-  double embreeShadowMrays() const {
-    return embreeShadowMs > 0 ? embreeShadowRays / (embreeShadowMs * 1e3) : 0.0;
-  }
+  double embreeShadowMrays() const { return embreeShadowMs > 0 ? embreeShadowRays / (embreeShadowMs * 1e3) : 0.0; }
 };
 
 #ifdef VKRAY_HAVE_EMBREE
@@ -312,10 +311,9 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
       build = std::min(build, g.bvh.stats.buildMs);
       row.nodes = g.bvh.stats.nodes;
       row.depth = g.bvh.stats.depth;
-      row.bytesPerTriangle =
-          static_cast<double>(g.triangles.size() * sizeof(gpu::Triangle) + g.normals.size() * sizeof(glm::vec4) +
-                              g.bvh.bytes()) /
-          static_cast<double>(row.triangles);
+      row.bytesPerTriangle = static_cast<double>(g.triangles.size() * sizeof(gpu::Triangle) +
+                                                 g.normals.size() * sizeof(glm::vec4) + g.bvh.bytes()) /
+                             static_cast<double>(row.triangles);
       // One counted render (ray counts; builds the pipelines), one warm-up, then the timed runs.
       TimedRender t = timeRender(renderer, scene, scene.render, options, 1, 1);
       auto [gpuMs, cpuMs] = timeRenders(renderer, scene, options, args.runs);
@@ -346,7 +344,8 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
 
   std::printf("\n%10s %9s %9s %6s %8s %9s %9s %9s %9s %9s", "triangles", "build ms", "nodes", "depth", "B/tri",
               "eye ms", "eye cpu", "eye Mr/s", "shd Mr/s", "rays");
-  if (embree) std::printf(" | %9s %8s %9s %9s %8s %8s", "emb build", "emb B/t", "emb eye", "emb shd", "eye x", "build x");
+  if (embree)
+    std::printf(" | %9s %8s %9s %9s %8s %8s", "emb build", "emb B/t", "emb eye", "emb shd", "eye x", "build x");
   std::printf("\n");
   for (const Row& r : rows) {
     std::printf("%10zu %9.1f %9zu %6d %8.1f %9.2f %9.1f %9.2f %9.2f %9llu", r.triangles, r.buildMs, r.nodes, r.depth,
@@ -385,8 +384,9 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
            "embree_bytes_per_triangle,embree_eye_mrays,embree_shadow_mrays\n";
     for (const Row& r : rows) {
       out << r.triangles << ',' << r.buildMs << ',' << r.nodes << ',' << r.depth << ',' << r.bytesPerTriangle << ','
-          << r.primaryMs << ',' << r.primaryCpuMs << ',' << r.shadowCpuMs << ',' << r.primaryMrays() << ',' << r.shadowMrays() << ',' << r.embreeBuildMs << ','
-          << r.embreeBytesPerTriangle << ',' << r.embreePrimaryMrays() << ',' << r.embreeShadowMrays() << '\n';
+          << r.primaryMs << ',' << r.primaryCpuMs << ',' << r.shadowCpuMs << ',' << r.primaryMrays() << ','
+          << r.shadowMrays() << ',' << r.embreeBuildMs << ',' << r.embreeBytesPerTriangle << ','
+          << r.embreePrimaryMrays() << ',' << r.embreeShadowMrays() << '\n';
     }
     std::printf("wrote %s\n", args.csv.string().c_str());
   }

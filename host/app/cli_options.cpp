@@ -31,7 +31,8 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(CLI::IsMember({"exact", "schlick"}));
   app.add_option("--transmissive-shadows", f.transmissiveShadows, "shadows of glass: attenuated or opaque")
       ->check(CLI::IsMember({"attenuated", "opaque"}));
-  app.add_option("--precision", f.precision, "intersection arithmetic: float32, or float64 (reference; needs shaderFloat64)")
+  app.add_option("--precision", f.precision,
+                 "intersection arithmetic: float32, or float64 (reference; needs shaderFloat64)")
       ->check(CLI::IsMember({"float32", "float64"}));
   app.add_option("--bvh", f.bvh, "acceleration structure: auto, on or off")
       ->check(CLI::IsMember({"auto", "on", "off"}));

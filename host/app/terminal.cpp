@@ -57,8 +57,11 @@ void ProgressBar::update(const RenderProgress& p) {
   int filled = std::clamp(static_cast<int>(p.fraction * kWidth + 0.5), 0, kWidth);
   char percent[16];
   std::snprintf(percent, sizeof percent, "%3.0f%%", p.fraction * 100.0);
-  std::string line = "[" + std::string(static_cast<std::size_t>(filled), '#') +
-                     std::string(static_cast<std::size_t>(kWidth - filled), '.') + "] " + percent;
+  std::string line = "[";
+  line.append(static_cast<std::size_t>(filled), '#');
+  line.append(static_cast<std::size_t>(kWidth - filled), '.');
+  line += "] ";
+  line += percent;
   // Rays per second only when the renderer counts rays (--stats): counting is compiled out otherwise.
   if (p.raysPerSecond > 0) {
     char rate[32];

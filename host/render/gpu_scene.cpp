@@ -51,7 +51,8 @@ std::vector<BvhPrimitive> bvhPrimitives(const Scene& scene, const GpuScene& g) {
   }
   for (std::size_t i = 0; i < g.polygons.size(); ++i) {
     Aabb b;
-    for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k) b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
+    for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k)
+      b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
     prims.push_back({b, gpu::kPrimPolygon << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
   }
   return prims;

@@ -197,9 +197,8 @@ const vulkan::ComputePipeline& Renderer::pipelineFor(Precision precision, const 
     }
     std::span<const std::uint32_t> code =
         f64 ? std::span<const std::uint32_t>(kTrace64Spv) : std::span<const std::uint32_t>(kTraceSpv);
-    auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, code, *pipelineLayout_, spec,
-                                                              cache_ ? &cache_->cache() : nullptr,
-                                                              f64 ? "trace (float64)" : "trace");
+    auto pipeline = std::make_unique<vulkan::ComputePipeline>(
+        context_, code, *pipelineLayout_, spec, cache_ ? &cache_->cache() : nullptr, f64 ? "trace (float64)" : "trace");
     it = pipelines_.emplace(key, std::move(pipeline)).first;
     if (cache_) cache_->save();
   }

@@ -23,13 +23,15 @@ bool finite(const dvec3& v) {
 
 std::string lowerExtension(const std::filesystem::path& p) {
   std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   return ext;
 }
 
 // Area-weighted vertex normals over vertices welded by exact position (glTF splits vertices at
 // texture seams; welding keeps the shading continuous across them). World space.
-std::vector<dvec3> smoothNormals(const std::vector<dvec3>& world, const std::vector<std::array<std::uint32_t, 3>>& faces,
+std::vector<dvec3> smoothNormals(const std::vector<dvec3>& world,
+                                 const std::vector<std::array<std::uint32_t, 3>>& faces,
                                  std::vector<std::uint32_t>& weld) {
   struct Hash {
     std::size_t operator()(const dvec3& v) const {

@@ -22,13 +22,13 @@ struct MeshData {
   static constexpr std::uint32_t kNone = 0xFFFFFFFFu;
 
   std::vector<glm::dvec3> positions;
-  std::vector<glm::dvec3> normals;                      // may be empty
-  std::vector<std::array<std::uint32_t, 3>> faces;      // indices into positions
+  std::vector<glm::dvec3> normals;                       // may be empty
+  std::vector<std::array<std::uint32_t, 3>> faces;       // indices into positions
   std::vector<std::array<std::uint32_t, 3>> faceNormals; // into normals (kNone: none); empty or one per face
-  std::vector<std::uint32_t> faceMaterials;             // into materials, kNone: the default
-  std::vector<Material> materials;                      // named "file: material"
-  std::optional<Camera> camera;                         // the first camera, when asked for
-  std::vector<PointLight> lights;                       // when asked for
+  std::vector<std::uint32_t> faceMaterials;              // into materials, kNone: the default
+  std::vector<Material> materials;                       // named "file: material"
+  std::optional<Camera> camera;                          // the first camera, when asked for
+  std::vector<PointLight> lights;                        // when asked for
 };
 
 enum class MeshNormals {
@@ -39,9 +39,9 @@ enum class MeshNormals {
 
 // What a `mesh` object asks for.
 struct MeshRequest {
-  std::filesystem::path file;           // resolved (relative paths already joined to the scene's dir)
-  std::string shownAs;                  // the file as messages name it
-  glm::dmat4 worldFromMesh{1.0};        // affine
+  std::filesystem::path file;            // resolved (relative paths already joined to the scene's dir)
+  std::string shownAs;                   // the file as messages name it
+  glm::dmat4 worldFromMesh{1.0};         // affine
   std::optional<std::uint32_t> material; // override: every triangle gets this scene material
   MeshNormals normals = MeshNormals::Auto;
   bool importCamera = false;

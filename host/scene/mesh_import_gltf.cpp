@@ -90,7 +90,8 @@ public:
 
   MeshData read() {
     for (const auto& ext : model_.extensionsRequired) {
-      if (std::find(std::begin(kSupportedRequired), std::end(kSupportedRequired), ext) == std::end(kSupportedRequired)) {
+      if (std::find(std::begin(kSupportedRequired), std::end(kSupportedRequired), ext) ==
+          std::end(kSupportedRequired)) {
         fail("requires extension '" + ext + "', which vkray does not support");
       }
     }
@@ -100,7 +101,8 @@ public:
     std::vector<int> roots;
     int sceneIndex = model_.defaultScene >= 0 ? model_.defaultScene : (model_.scenes.empty() ? -1 : 0);
     if (sceneIndex >= 0) {
-      if (static_cast<std::size_t>(sceneIndex) >= model_.scenes.size()) fail("scene " + std::to_string(sceneIndex) + " does not exist");
+      if (static_cast<std::size_t>(sceneIndex) >= model_.scenes.size())
+        fail("scene " + std::to_string(sceneIndex) + " does not exist");
       roots = model_.scenes[static_cast<std::size_t>(sceneIndex)].nodes;
     } else {
       std::vector<bool> isChild(model_.nodes.size(), false);
@@ -137,7 +139,8 @@ private:
     const std::string where = "nodes[" + std::to_string(index) + "]";
     glm::dmat4 world = parent * localMatrix(node, where);
     if (node.mesh >= 0) {
-      if (static_cast<std::size_t>(node.mesh) >= model_.meshes.size()) fail(where + ".mesh: no mesh " + std::to_string(node.mesh));
+      if (static_cast<std::size_t>(node.mesh) >= model_.meshes.size())
+        fail(where + ".mesh: no mesh " + std::to_string(node.mesh));
       readMesh(static_cast<std::size_t>(node.mesh), world);
     }
     if (request_.importCamera && node.camera >= 0 && !data_.camera) readCamera(node, world, where);
@@ -205,8 +208,9 @@ private:
       fail(bvName + " reaches past the end of buffer " + std::to_string(bv.buffer) + " (" +
            std::to_string(buffer.data.size()) + " bytes)");
     }
-    std::size_t element = static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType))) *
-                          static_cast<std::size_t>(tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type)));
+    std::size_t element =
+        static_cast<std::size_t>(tinygltf::GetComponentSizeInBytes(static_cast<std::uint32_t>(a.componentType))) *
+        static_cast<std::size_t>(tinygltf::GetNumComponentsInType(static_cast<std::uint32_t>(a.type)));
     std::size_t stride = bv.byteStride ? bv.byteStride : element;
     if (stride < element) fail(bvName + ".byteStride " + std::to_string(bv.byteStride) + " is smaller than an element");
     AccessorView v;
@@ -242,7 +246,8 @@ private:
       }
       auto pos = prim.attributes.find("POSITION");
       if (pos == prim.attributes.end()) fail(where + " has no POSITION attribute");
-      AccessorView positions = view(pos->second, where + " POSITION", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
+      AccessorView positions =
+          view(pos->second, where + " POSITION", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
       std::optional<AccessorView> normals;
       if (auto nrm = prim.attributes.find("NORMAL"); nrm != prim.attributes.end()) {
         normals = view(nrm->second, where + " NORMAL", TINYGLTF_TYPE_VEC3, {TINYGLTF_COMPONENT_TYPE_FLOAT});
@@ -430,7 +435,8 @@ MeshData readGltf(const MeshRequest& request) {
   std::string err;
   std::string warn;
   std::string ext = request.file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   bool ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model, &err, &warn, request.file.string())
                           : loader.LoadASCIIFromFile(&model, &err, &warn, request.file.string());
   if (!ok) throw InputError(request.shownAs, "not a valid glTF file: " + firstLine(err.empty() ? warn : err));

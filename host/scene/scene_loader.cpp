@@ -306,7 +306,8 @@ void readMesh(const JsonNode& obj, LoadContext& ctx) {
     request.normals = mode == "flat" ? MeshNormals::Flat : mode == "smooth" ? MeshNormals::Smooth : MeshNormals::Auto;
   }
   std::string ext = request.file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   bool gltf = ext == ".gltf" || ext == ".glb";
   if (auto c = obj.find("import_camera")) {
     request.importCamera = c->boolean();
@@ -431,8 +432,8 @@ std::string readSceneFile(const std::filesystem::path& path, const std::string& 
   while (in.read(chunk.data(), static_cast<std::streamsize>(chunk.size())) || in.gcount() > 0) {
     text.append(chunk.data(), static_cast<std::size_t>(in.gcount()));
     if (text.size() > kMaxSceneFileBytes) {
-      throw InputError(shownAs, "file too large to be a scene (more than " + std::to_string(kMaxSceneFileBytes) +
-                                    " bytes)");
+      throw InputError(shownAs,
+                       "file too large to be a scene (more than " + std::to_string(kMaxSceneFileBytes) + " bytes)");
     }
   }
   if (in.bad()) throw InputError(shownAs, "cannot read");

@@ -197,7 +197,7 @@ struct RayStats {
   uint refinedPixels;  // adaptive AA: pixels supersampled
   uint nonFinite;      // samples whose radiance was NaN/Inf (replaced by black); expected 0
   uint pad0;
-  uint truncated;      // samples whose ray tree the driver cut short (llvmpipe's loop limit); counted always
+  uint truncated;      // samples whose glass tree the driver cut short (llvmpipe's loop limit); always counted
   uint pad2;
 };
 
