@@ -8,6 +8,9 @@
 
 #include <unistd.h>
 
+#include "scene/scene.h"
+#include "util/error.h"
+
 namespace vkray::fuzz {
 
 namespace fs = std::filesystem;
@@ -55,6 +58,18 @@ std::pair<std::string_view, std::string_view> splitCompanion(const std::uint8_t*
   auto at = all.find(kMarker);
   if (at == std::string_view::npos) return {all, {}};
   return {all.substr(0, at), all.substr(at + kMarker.size())};
+}
+
+void importMesh(MeshData (*read)(const MeshRequest&), MeshRequest& request) {
+  try {
+    MeshData mesh = read(request);
+    for (auto normals : {MeshNormals::Auto, MeshNormals::Smooth}) {
+      request.normals = normals;
+      Scene scene;
+      appendMesh(mesh, request, scene);
+    }
+  } catch (const InputError&) {
+  }
 }
 
 } // namespace vkray::fuzz

@@ -27,14 +27,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   request.importCamera = false;
   request.importLights = false;
-  try {
-    vkray::MeshData mesh = vkray::readGltf(request);
-    for (auto normals : {vkray::MeshNormals::Auto, vkray::MeshNormals::Smooth}) {
-      request.normals = normals;
-      vkray::Scene scene;
-      vkray::appendMesh(mesh, request, scene);
-    }
-  } catch (const vkray::InputError&) {
-  }
+  vkray::fuzz::importMesh(vkray::readGltf, request);
   return 0;
 }

@@ -7,7 +7,6 @@
 
 #include "fuzz_support.h"
 #include "scene/mesh_import.h"
-#include "util/error.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   auto [obj, mtl] = vkray::fuzz::splitCompanion(data, size);
@@ -15,14 +14,6 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   vkray::MeshRequest request;
   request.file = vkray::fuzz::writeScratch("fuzz.obj", obj);
   request.shownAs = "fuzz.obj";
-  try {
-    vkray::MeshData mesh = vkray::readObj(request);
-    for (auto normals : {vkray::MeshNormals::Auto, vkray::MeshNormals::Smooth}) {
-      request.normals = normals;
-      vkray::Scene scene;
-      vkray::appendMesh(mesh, request, scene);
-    }
-  } catch (const vkray::InputError&) {
-  }
+  vkray::fuzz::importMesh(vkray::readObj, request);
   return 0;
 }

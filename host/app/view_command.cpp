@@ -37,18 +37,29 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   return cmd;
 }
 
-int runView(const ViewArgs& a) {
+namespace {
+
+// What `view` and `bench view` set alike: the scene, the render flags and the device.
+ViewerOptions baseViewerOptions(const std::filesystem::path& scene, const RenderFlags& render,
+                                const DeviceFlags& device) {
   ViewerOptions o;
-  o.scene = a.scene;
-  o.applyOverrides = [flags = a.render](RenderSettings& s) { applyRenderFlags(flags, s); };
+  o.scene = scene;
+  o.applyOverrides = [flags = render](RenderSettings& s) { applyRenderFlags(flags, s); };
   // --spp is what each frame adds; the scene's spp is for headless renders.
-  o.samplesPerFrame = a.render.spp;
-  o.windowWidth = a.render.width;
-  o.windowHeight = a.render.height;
-  o.device = a.device.device;
-  o.validate = a.device.validate;
+  o.samplesPerFrame = render.spp;
+  o.windowWidth = render.width;
+  o.windowHeight = render.height;
+  o.device = device.device;
+  o.validate = device.validate;
+  o.pipelineCache = !device.noPipelineCache;
+  return o;
+}
+
+} // namespace
+
+int runView(const ViewArgs& a) {
+  ViewerOptions o = baseViewerOptions(a.scene, a.render, a.device);
   o.syncValidate = a.device.syncValidate;
-  o.pipelineCache = !a.device.noPipelineCache;
   o.specialize = !a.noSpecialize;
   o.vsync = !a.noVsync;
   o.renderScale = a.scale;
@@ -104,15 +115,7 @@ int runBenchView(const BenchViewArgs& a) {
   for (const auto& path : a.scenes) {
     bool header = false;
     for (const Row& row : rows) {
-      ViewerOptions o;
-      o.scene = path;
-      o.applyOverrides = [flags = a.render](RenderSettings& s) { applyRenderFlags(flags, s); };
-      o.samplesPerFrame = a.render.spp;
-      o.windowWidth = a.render.width;
-      o.windowHeight = a.render.height;
-      o.device = a.device.device;
-      o.validate = a.device.validate;
-      o.pipelineCache = !a.device.noPipelineCache;
+      ViewerOptions o = baseViewerOptions(path, a.render, a.device);
       o.vsync = false; // the frame rate of the work, not of the display
       o.countStats = row.counters;
       o.overlay = row.overlay;

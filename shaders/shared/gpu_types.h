@@ -66,15 +66,15 @@ VKRAY_CONST(uint, kSpecUseBvh, 4u);
 VKRAY_CONST(uint, kSpecShadows, 5u);
 VKRAY_CONST(uint, kSpecReflection, 6u);
 VKRAY_CONST(uint, kSpecRefraction, 7u);
-VKRAY_CONST(uint, kSpecStackSize, 8u);       // pending branches of the Whitted tree (>= 1)
+VKRAY_CONST(uint, kSpecStackSize, 8u); // pending branches of the Whitted tree (>= 1)
 VKRAY_CONST(uint, kSpecCountStats, 9u);
-VKRAY_CONST(uint, kSpecNumerics, 10u);       // kNumericsRobust / kNumericsNaive
-VKRAY_CONST(uint, kSpecFresnel, 11u);        // kFresnelExact / kFresnelSchlick
-VKRAY_CONST(uint, kSpecShadowMode, 12u);     // kShadowsOpaque / kShadowsAttenuated
-VKRAY_CONST(uint, kSpecChecker, 13u);        // any material has a checker
-VKRAY_CONST(uint, kSpecSmoothNormals, 14u);  // any triangle has shading normals
-VKRAY_CONST(uint, kSpecSceneInUbo, 15u);     // read the small arrays from the *Ubo bindings
-VKRAY_CONST(uint, kSpecCenterSample, 16u);   // one sample through each pixel centre (no sequence)
+VKRAY_CONST(uint, kSpecNumerics, 10u);      // kNumericsRobust / kNumericsNaive
+VKRAY_CONST(uint, kSpecFresnel, 11u);       // kFresnelExact / kFresnelSchlick
+VKRAY_CONST(uint, kSpecShadowMode, 12u);    // kShadowsOpaque / kShadowsAttenuated
+VKRAY_CONST(uint, kSpecChecker, 13u);       // any material has a checker
+VKRAY_CONST(uint, kSpecSmoothNormals, 14u); // any triangle has shading normals
+VKRAY_CONST(uint, kSpecSceneInUbo, 15u);    // read the small arrays from the *Ubo bindings
+VKRAY_CONST(uint, kSpecCenterSample, 16u);  // one sample through each pixel centre (no sequence)
 // Counts of the brute-force arrays and of the lights. A small count baked in lets the driver unroll
 // the loop, so every scene read has a constant address (a scalar load on lavapipe, where a
 // loop-indexed read is an 8-lane gather). kRuntimeCount: read the count from FrameParams instead.
@@ -113,8 +113,8 @@ VKRAY_CONST(uint, kPrimPlane, 3u); // never in the BVH; used to tag hits
 
 // ---- Render passes (push constant `pass`) and flags -----------------------------------------------
 // The image holds, per pixel, vec4(sum of sample radiances, sample count); the host divides.
-VKRAY_CONST(uint, kPassSample, 0u);  // sampleCount samples per pixel (sampleBase, sampleBase + 1, ...)
-VKRAY_CONST(uint, kPassRefine, 1u);  // adaptive AA: resample pixels whose neighbours differ
+VKRAY_CONST(uint, kPassSample, 0u);       // sampleCount samples per pixel (sampleBase, sampleBase + 1, ...)
+VKRAY_CONST(uint, kPassRefine, 1u);       // adaptive AA: resample pixels whose neighbours differ
 VKRAY_CONST(uint, kFlagCenterSample, 1u); // the single sample goes through the pixel centre
 VKRAY_CONST(uint, kFlagAccumulate, 2u);   // add to the sums already in the image
 
@@ -157,9 +157,9 @@ struct Polygon {
 // parent, so an interior node stores only the index of its second child.
 struct BvhNode {
   vec3 boundsMin;
-  uint offset;     // leaf: first PrimRef; interior: index of the second child
+  uint offset; // leaf: first PrimRef; interior: index of the second child
   vec3 boundsMax;
-  uint countAxis;  // bits 0..15: primitive count (0: interior); bits 16..17: split axis
+  uint countAxis; // bits 0..15: primitive count (0: interior); bits 16..17: split axis
 };
 
 struct SceneUbo {
@@ -191,13 +191,13 @@ struct RayStats {
   uint shadowRays;
   uint reflectionRays;
   uint refractionRays;
-  uint bailoutSaved;   // branches not traced because their weight fell below the bailout
-  uint stackOverflow;  // branches dropped because the explicit stack was full
-  uint maxDepth;       // deepest bounce traced
-  uint refinedPixels;  // adaptive AA: pixels supersampled
-  uint nonFinite;      // samples whose radiance was NaN/Inf (replaced by black); expected 0
+  uint bailoutSaved;  // branches not traced because their weight fell below the bailout
+  uint stackOverflow; // branches dropped because the explicit stack was full
+  uint maxDepth;      // deepest bounce traced
+  uint refinedPixels; // adaptive AA: pixels supersampled
+  uint nonFinite;     // samples whose radiance was NaN/Inf (replaced by black); expected 0
   uint pad0;
-  uint truncated;      // samples whose glass tree the driver cut short (llvmpipe's loop limit); always counted
+  uint truncated; // samples whose glass tree the driver cut short (llvmpipe's loop limit); always counted
   uint pad2;
 };
 
@@ -221,11 +221,11 @@ VKRAY_CONST(uint, kProbeBindingQueries, 0u);
 VKRAY_CONST(uint, kProbeBindingResults, 1u);
 VKRAY_CONST(uint, kProbeBindingVertices, 2u);
 
-VKRAY_CONST(uint, kProbeSphere, 0u);   // a: centre, radius; op.z: 1 = a = 1 as the kernel (unit dir)
-VKRAY_CONST(uint, kProbePlane, 1u);    // a: normal, D
-VKRAY_CONST(uint, kProbeTriangle, 2u); // a, b, c: vertices
-VKRAY_CONST(uint, kProbePolygon, 3u);  // a: normal; op.z/op.w: first vertex, count in Vertices[]
-VKRAY_CONST(uint, kProbeSpawn, 4u);    // origin: p; dir: side normal; a.x: error bound
+VKRAY_CONST(uint, kProbeSphere, 0u);     // a: centre, radius; op.z: 1 = a = 1 as the kernel (unit dir)
+VKRAY_CONST(uint, kProbePlane, 1u);      // a: normal, D
+VKRAY_CONST(uint, kProbeTriangle, 2u);   // a, b, c: vertices
+VKRAY_CONST(uint, kProbePolygon, 3u);    // a: normal; op.z/op.w: first vertex, count in Vertices[]
+VKRAY_CONST(uint, kProbeSpawn, 4u);      // origin: p; dir: side normal; a.x: error bound
 VKRAY_CONST(uint, kProbeDielectric, 5u); // dir: incident; a: shading normal (facing); b: geometric
                                          // normal (facing); c.x, c.y: n1, n2; op.z: 1 = Schlick
 
@@ -235,7 +235,7 @@ struct ProbeQuery {
   vec4 a;
   vec4 b;
   vec4 c;
-  uvec4 op;    // x: kProbe* operation; y: kNumerics*; z, w: per operation
+  uvec4 op; // x: kProbe* operation; y: kNumerics*; z, w: per operation
 };
 
 struct ProbeResult {
