@@ -21,6 +21,11 @@ using glm::dvec3;
 
 const char* kCamera = R"("camera": { "position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y": 40 },)";
 
+// A path key folded into the non-negative ints stableKey() deals in (-1 means "unstable").
+int positiveKey(std::uint64_t k) {
+  return static_cast<int>(k % 0x7fffffffu);
+}
+
 // Classifies a pixel with `key` at its centre and at four nearby points; -1 when they disagree.
 int stableKey(const ReferenceTracer& ref, std::uint32_t x, std::uint32_t y,
               const std::function<int(const dvec3&, const dvec3&)>& key) {
@@ -222,11 +227,12 @@ TEST(RenderReference, ShowcaseMatchesTheDoublePrecisionTracer) {
   // Stability key: the sequence of materials along the mirror path and the shadow state of the
   // first hit, so pixels on any discontinuity are excluded.
   auto key = [&](const dvec3& o0, const dvec3& d0) {
-    int k = 0;
+    // Unsigned: a deep mirror path shifts it past 32 bits (it wraps, which only hashes it).
+    std::uint64_t k = 0;
     dvec3 o = o0, d = d0;
     for (int depth = 0; depth <= scene.render.maxDepth; ++depth) {
       RefHit h = ref.closestHit(o, d, 1e-7);
-      if (!h.hit()) return k * 8 + 7;
+      if (!h.hit()) return positiveKey(k * 8 + 7);
       dvec3 q = (h.p - h.n * 1e-7) / 1.0;
       int cell = static_cast<int>(std::floor(q.x) + std::floor(q.y) + std::floor(q.z)) & 1;
       int shadow = 0;
@@ -235,13 +241,13 @@ TEST(RenderReference, ShowcaseMatchesTheDoublePrecisionTracer) {
         RefHit s = ref.closestHit(h.p, glm::normalize(toL), 1e-7, glm::length(toL));
         shadow = shadow * 2 + s.hit();
       }
-      k = (k * 8 + static_cast<int>(h.material)) * 16 + cell * 4 + shadow;
+      k = (k * 8 + h.material) * 16 + static_cast<std::uint64_t>(cell * 4 + shadow);
       if (scene.materials[h.material].reflection <= 0) break;
       dvec3 n = glm::dot(h.n, d) < 0 ? h.n : -h.n;
       d = d - 2.0 * glm::dot(d, n) * n;
       o = h.p;
     }
-    return k;
+    return positiveKey(k);
   };
   int checked = 0;
   for (std::uint32_t y = 0; y < 60; ++y) {
