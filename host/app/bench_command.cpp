@@ -64,13 +64,6 @@ int runBenchTime(const BenchTimeArgs& args) {
 
 namespace {
 
-vulkan::Context makeContext(const DeviceFlags& flags) {
-  vulkan::ContextOptions o;
-  o.device = flags.device;
-  o.validation = flags.validate;
-  return vulkan::Context(o);
-}
-
 void scaleToHeight(RenderSettings& s, std::uint32_t height) {
   double aspect = static_cast<double>(s.width) / s.height;
   s.height = height;

@@ -1,9 +1,26 @@
 // Shared command-line flags (see cli_options.h).
 #include "app/cli_options.h"
 
+#include <cmath>
+#include <sstream>
+
 #include "scene/scene_limits.h"
 
 namespace vkray {
+
+CLI::Validator realRange(double lo, double hi) {
+  std::ostringstream bounds;
+  bounds << lo << " to " << hi;
+  std::string text = bounds.str();
+  return CLI::Validator(
+      [lo, hi, text](std::string& input) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(input, v)) return "Value " + input + " is not a number";
+        if (!(v >= lo && v <= hi)) return "Value " + input + " not in range " + text;
+        return {};
+      },
+      "REAL in [" + text + "]");
+}
 
 void addDeviceFlags(CLI::App& app, DeviceFlags& f) {
   app.add_option("--device", f.device, "Vulkan device: index or name substring (see 'vkray info')")
@@ -20,11 +37,11 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(CLI::Range(0ll, kMaxDepthLimit));
   app.add_option("--spp", f.spp, "samples per pixel")->check(CLI::Range(1ll, kMaxSpp));
   app.add_option("--bailout", f.bailout, "skip branches whose weight is below this (0: trace all)")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(realRange(0.0, 1.0));
   app.add_option("--aa", f.antialiasing, "antialiasing: stratified (every pixel gets spp) or adaptive")
       ->check(CLI::IsMember({"stratified", "adaptive"}));
   app.add_option("--adaptive-threshold", f.adaptiveThreshold, "adaptive AA: neighbour difference that triggers spp")
-      ->check(CLI::Range(0.0, 1.0));
+      ->check(realRange(0.0, 1.0));
   app.add_option("--numerics", f.numerics, "intersection numerics: robust (default) or naive")
       ->check(CLI::IsMember({"robust", "naive"}));
   app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")

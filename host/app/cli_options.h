@@ -25,6 +25,10 @@ struct RenderFlags {
   std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision;
 };
 
+// A check that a real number lies in [lo, hi], whose message prints the bounds as written
+// ("not in range 1 to 10000"; CLI::Range prints doubles with six decimals) and refuses NaN.
+CLI::Validator realRange(double lo, double hi);
+
 void addDeviceFlags(CLI::App& app, DeviceFlags& flags);
 void addRenderFlags(CLI::App& app, RenderFlags& flags);
 void applyRenderFlags(const RenderFlags& flags, RenderSettings& settings);

@@ -25,7 +25,7 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("-q,--quiet", render.quiet, "no progress bar");
   renderCmd->add_flag("--no-specialize", render.noSpecialize, "compile every feature in (for comparison)");
   renderCmd->add_option("--band-ms", render.bandMs, "target GPU time per submission in ms (watchdog safety)")
-      ->check(CLI::Range(1.0, 10000.0));
+      ->check(realRange(1.0, 10000.0));
   renderCmd
       ->add_option("--scene-memory", render.sceneMemory,
                    "where the kernel reads small scenes from: auto, uniform or storage buffers")
