@@ -126,7 +126,9 @@ TEST(NumericsRefraction, TotalInternalReflectionAndTheCriticalAngle) {
     EXPECT_TRUE(std::isfinite(t.x) && std::isfinite(t.y) && std::isfinite(t.z));
     float len = glm::length(t);
     EXPECT_TRUE(len == 0.0f || std::abs(len - 1.0f) < 1e-5f) << "|t| = " << len;
-    if (len == 0.0f) EXPECT_EQ(F, 1.0f) << "a missing refracted ray must send all weight to reflection";
+    if (len == 0.0f) {
+      EXPECT_EQ(F, 1.0f) << "a missing refracted ray must send all weight to reflection";
+    }
   }
 }
 
