@@ -128,10 +128,7 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
   std::filesystem::create_directories(args.out, ec);
   if (ec) throw InputError(args.out.string(), "cannot create the output directory: " + ec.message());
 
-  vulkan::ContextOptions ctxOptions;
-  ctxOptions.device = args.device.device;
-  ctxOptions.validation = args.device.validate;
-  vulkan::Context context(ctxOptions);
+  vulkan::Context context(contextOptions(args.device));
   const bool float64 = context.float64Enabled();
   const int runs = args.quick ? 1 : args.runs;
   const std::uint32_t height = args.quick ? 24 : args.height;

@@ -37,10 +37,7 @@ TimedRender timeRender(Renderer& renderer, const Scene& scene, const RenderSetti
 }
 
 int runBenchTime(const BenchTimeArgs& args) {
-  vulkan::ContextOptions ctxOptions;
-  ctxOptions.device = args.device.device;
-  ctxOptions.validation = args.device.validate;
-  vulkan::Context context(ctxOptions);
+  vulkan::Context context(contextOptions(args.device));
   std::printf("device: %s (%s)\n", context.info().name.c_str(), context.info().driver.c_str());
   std::printf("%-28s %10s %10s %10s %12s %10s\n", "scene", "median ms", "min ms", "max ms", "rays", "Mrays/s");
   for (const auto& path : args.scenes) {
@@ -80,9 +77,7 @@ int runBenchSpecialize(const BenchSpecializeArgs& args) {
     }
     std::sort(scenes.begin(), scenes.end());
   }
-  vulkan::ContextOptions ctxOptions;
-  ctxOptions.device = args.device.device;
-  vulkan::Context context(ctxOptions);
+  vulkan::Context context(contextOptions(args.device));
   std::printf("device: %s (%s); median of %d runs after a warm-up; GPU trace time\n", context.info().name.c_str(),
               context.info().driver.c_str(), args.runs);
   std::printf("%-28s %9s %12s %12s %8s\n", "scene", "size", "special ms", "general ms", "ratio");

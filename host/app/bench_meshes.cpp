@@ -278,10 +278,7 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
 } // namespace
 
 int runBenchMeshes(const BenchMeshesArgs& args) {
-  vulkan::ContextOptions ctxOptions;
-  ctxOptions.device = args.device.device;
-  ctxOptions.validation = args.device.validate;
-  vulkan::Context context(ctxOptions);
+  vulkan::Context context(contextOptions(args.device));
   bool embree = false;
 #ifdef VKRAY_HAVE_EMBREE
   embree = !args.noEmbree;

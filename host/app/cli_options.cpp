@@ -30,6 +30,14 @@ void addDeviceFlags(CLI::App& app, DeviceFlags& f) {
   app.add_flag("--no-pipeline-cache", f.noPipelineCache, "do not read or write the on-disk pipeline cache");
 }
 
+vulkan::ContextOptions contextOptions(const DeviceFlags& f) {
+  vulkan::ContextOptions o;
+  o.device = f.device;
+  o.validation = f.validate;
+  o.synchronizationValidation = f.syncValidate;
+  return o;
+}
+
 void addRenderFlags(CLI::App& app, RenderFlags& f) {
   app.add_option("--width", f.width, "image width in pixels")->check(CLI::Range(1ll, kMaxImageSide));
   app.add_option("--height", f.height, "image height in pixels")->check(CLI::Range(1ll, kMaxImageSide));

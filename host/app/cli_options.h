@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 
 #include "scene/scene.h"
+#include "vk/context.h"
 
 namespace vkray {
 
@@ -30,6 +31,8 @@ struct RenderFlags {
 CLI::Validator realRange(double lo, double hi);
 
 void addDeviceFlags(CLI::App& app, DeviceFlags& flags);
+// The context the flags ask for: device choice, validation, synchronization validation.
+vulkan::ContextOptions contextOptions(const DeviceFlags& flags);
 void addRenderFlags(CLI::App& app, RenderFlags& flags);
 void applyRenderFlags(const RenderFlags& flags, RenderSettings& settings);
 

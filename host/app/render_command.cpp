@@ -70,11 +70,7 @@ int runRender(const RenderArgs& args) {
     std::fflush(stdout);
   }
 
-  vulkan::ContextOptions ctxOptions;
-  ctxOptions.validation = args.device.validate;
-  ctxOptions.synchronizationValidation = args.device.syncValidate;
-  ctxOptions.device = args.device.device;
-  vulkan::Context context = openContext(ctxOptions);
+  vulkan::Context context = openContext(contextOptions(args.device));
   std::unique_ptr<vulkan::PipelineCache> cache;
   if (!args.device.noPipelineCache) {
     cache = std::make_unique<vulkan::PipelineCache>(context, vulkan::PipelineCache::defaultFile(context));
