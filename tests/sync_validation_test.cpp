@@ -2,7 +2,6 @@
 // VKRAY_SYNC_VALIDATION=1) is live: a deliberately broken barrier in a test-only command sequence
 // (fill a buffer, then copy from it) is reported as a hazard, and the correct barrier is not. Without
 // this, a layer that silently failed to enable its synchronization checks would pass every test.
-#include <cstdlib>
 #include <string>
 #include <vector>
 
@@ -58,13 +57,8 @@ std::string joined(const std::vector<std::string>& messages) {
 
 // A context of the test's own with synchronization validation on, whatever the suite runs with.
 TEST(GpuSyncValidation, BrokenBarriersAreReportedAndTheCorrectOneIsNot) {
-  vulkan::ContextOptions options;
-  const char* device = std::getenv("VKRAY_TEST_DEVICE");
-  options.device = device && *device ? device : "llvmpipe";
-  options.validation = true;
-  options.synchronizationValidation = true;
-  options.echoValidation = false; // the messages are expected; the test prints them if they are wrong
-  vulkan::Context context(options);
+  // Echo off: the messages are expected; the test prints them if they are wrong.
+  vulkan::Context context(testContextOptions(true, false));
 
   fillThenCopy(context, Barrier::Correct);
   EXPECT_EQ(context.validationMessageCount(), 0u) << joined(context.validationMessages());
@@ -82,12 +76,7 @@ TEST(GpuSyncValidation, BrokenBarriersAreReportedAndTheCorrectOneIsNot) {
 // The control: with plain validation the same missing barrier goes unreported, so the hazards above
 // come from the synchronization checks, and only a run with them on can catch one.
 TEST(GpuSyncValidation, PlainValidationDoesNotSeeTheMissingBarrier) {
-  vulkan::ContextOptions options;
-  const char* device = std::getenv("VKRAY_TEST_DEVICE");
-  options.device = device && *device ? device : "llvmpipe";
-  options.validation = true;
-  options.echoValidation = false;
-  vulkan::Context context(options);
+  vulkan::Context context(testContextOptions(false, false));
   fillThenCopy(context, Barrier::Missing);
   EXPECT_EQ(context.validationMessageCount(), 0u) << joined(context.validationMessages());
 }

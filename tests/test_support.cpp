@@ -15,15 +15,19 @@ std::size_t gSeenMessages = 0;
 
 } // namespace
 
+vulkan::ContextOptions testContextOptions(bool synchronizationValidation, bool echoValidation) {
+  vulkan::ContextOptions options;
+  const char* device = std::getenv("VKRAY_TEST_DEVICE");
+  options.device = device && *device ? device : "llvmpipe";
+  options.validation = true;
+  options.synchronizationValidation = synchronizationValidation;
+  options.echoValidation = echoValidation;
+  return options;
+}
+
 vulkan::Context& gpu() {
   static std::unique_ptr<vulkan::Context> context = [] {
-    vulkan::ContextOptions options;
-    const char* device = std::getenv("VKRAY_TEST_DEVICE");
-    options.device = device && *device ? device : "llvmpipe";
-    options.validation = true;
-    options.synchronizationValidation = syncValidationRequested();
-    options.echoValidation = true;
-    return std::make_unique<vulkan::Context>(options);
+    return std::make_unique<vulkan::Context>(testContextOptions(syncValidationRequested(), true));
   }();
   return *context;
 }

@@ -16,6 +16,9 @@ namespace vkray::test {
 // The process-wide context: device "llvmpipe" (override with VKRAY_TEST_DEVICE), validation on,
 // synchronization validation on when VKRAY_SYNC_VALIDATION=1.
 vulkan::Context& gpu();
+// Options for a context like gpu()'s: the test device with validation on; synchronization validation
+// and echoing messages to stderr as asked (a test that provokes messages on purpose turns echo off).
+vulkan::ContextOptions testContextOptions(bool synchronizationValidation, bool echoValidation);
 
 // A renderer on gpu(); pipelines are cached across tests that share a specialization.
 Renderer& renderer();
