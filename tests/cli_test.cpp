@@ -155,6 +155,7 @@ TEST_F(Cli, InfoListsLavapipe) {
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_NE(r.out.find("llvmpipe"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("maxStorageBufferRange"), std::string::npos);
+  EXPECT_NE(r.out.find("maxTexelBufferElements: 134217728"), std::string::npos) << r.out;
 }
 
 TEST_F(Cli, UnknownDeviceIsOneLine) {

@@ -452,9 +452,9 @@ TEST(RenderMesh, BundledMeshSceneRenders) {
   EXPECT_GT(r.stats.reflection, 0u);
 }
 
-// Scene arrays are storage buffers: one larger than the device binds is refused before anything is
-// allocated, with the array, the device and the limit named (a 3 M-triangle scene on lavapipe:
-// "triangles needs 138 MiB but llvmpipe ... binds at most 128 MiB per storage buffer
+// The other scene arrays (spheres, polygons, materials, ...) are storage buffers: one larger than the
+// device binds is refused before anything is allocated, with the array, the device and the limit
+// named ("spheres needs 138 MiB but llvmpipe ... binds at most 128 MiB per storage buffer
 // (maxStorageBufferRange)"), never bound truncated.
 TEST(RenderMesh, ArraysBeyondTheStorageBufferLimitAreRefusedWithTheLimitNamed) {
   const vulkan::Context& context = test::gpu();
@@ -469,6 +469,28 @@ TEST(RenderMesh, ArraysBeyondTheStorageBufferLimitAreRefusedWithTheLimitNamed) {
     EXPECT_NE(what.find("(maxStorageBufferRange)"), std::string::npos) << what;
     EXPECT_NE(what.find(context.info().name), std::string::npos) << what;
   }
+  test::expectNoValidationMessages();
+}
+
+// The triangle, normal and BVH arrays are texel buffers: one with more texels than the device reads
+// is refused the same way, naming maxTexelBufferElements, before anything is allocated.
+TEST(RenderMesh, ArraysBeyondTheTexelBufferLimitAreRefusedWithTheLimitNamed) {
+  const vulkan::Context& context = test::gpu();
+  std::uint64_t limit = context.info().maxTexelBufferElements;
+  ASSERT_GT(limit, 0u);
+  try {
+    vulkan::Buffer buffer(context, (limit + 1) * 16, vk::Format::eR32G32B32A32Sfloat, vulkan::MemoryUse::DeviceLocal,
+                          "triangles");
+    FAIL() << "a texel buffer beyond maxTexelBufferElements was created";
+  } catch (const DeviceError& e) {
+    std::string what = e.what();
+    EXPECT_EQ(what.rfind("triangles needs " + std::to_string(limit + 1) + " texels but ", 0), 0u) << what;
+    EXPECT_NE(what.find("(maxTexelBufferElements)"), std::string::npos) << what;
+    EXPECT_NE(what.find(context.info().name), std::string::npos) << what;
+  }
+  // Within the limit, the buffer comes with its view.
+  vulkan::Buffer one(context, 4, vk::Format::eR32Uint, vulkan::MemoryUse::DeviceLocal, "one reference");
+  EXPECT_TRUE(one.texelView());
   test::expectNoValidationMessages();
 }
 

@@ -181,6 +181,8 @@ int runInfo(const DeviceFlags& flags) {
     std::printf("  timestamps: %s (GPU trace time)\n", d.timestamps ? "yes" : "no");
     std::printf("  maxStorageBufferRange: %llu MiB (largest scene array / image band)\n",
                 static_cast<unsigned long long>(d.maxStorageBufferRange >> 20));
+    std::printf("  maxTexelBufferElements: %llu (texels of the triangle, normal and BVH arrays)\n",
+                static_cast<unsigned long long>(d.maxTexelBufferElements));
     std::printf("  maxMemoryAllocationSize: %llu MiB\n",
                 static_cast<unsigned long long>(d.maxMemoryAllocationSize >> 20));
   }

@@ -27,11 +27,31 @@ bool isUniformBinding(std::uint32_t b) {
   return b == gpu::kBindingFrame || b == gpu::kBindingSceneUbo;
 }
 
+// The mesh-sized arrays are texel buffers (see shaders/lib/scene.glsl); BVH references are R32UI,
+// the others RGBA32F.
+bool isTexelBinding(std::uint32_t b) {
+  return b == gpu::kBindingTriangles || b == gpu::kBindingNormals || b == gpu::kBindingBvhNodes ||
+         b == gpu::kBindingPrimRefs;
+}
+
+vk::DescriptorType descriptorType(std::uint32_t b) {
+  if (isTexelBinding(b)) return vk::DescriptorType::eUniformTexelBuffer;
+  return isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
+}
+
 template <typename T>
 void uploadArray(std::unique_ptr<vulkan::Buffer>& buffer, const vulkan::Context& ctx, const std::vector<T>& data,
                  const std::string& name) {
   buffer = std::make_unique<vulkan::Buffer>(ctx, data.size() * sizeof(T), vk::BufferUsageFlagBits::eStorageBuffer,
                                             vulkan::MemoryUse::DeviceLocal, name);
+  buffer->write(data.data(), data.size() * sizeof(T));
+}
+
+template <typename T>
+void uploadTexels(std::unique_ptr<vulkan::Buffer>& buffer, const vulkan::Context& ctx, const std::vector<T>& data,
+                  vk::Format format, const std::string& name) {
+  buffer.reset(); // the old array's memory goes back first
+  buffer = std::make_unique<vulkan::Buffer>(ctx, data.size() * sizeof(T), format, vulkan::MemoryUse::DeviceLocal, name);
   buffer->write(data.data(), data.size() * sizeof(T));
 }
 
@@ -61,16 +81,16 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
   vulkan::vulkanStep("creating the renderer's layouts", [&] {
     std::vector<vk::DescriptorSetLayoutBinding> bindings;
     for (std::uint32_t b = 0; b < gpu::kBindingCount; ++b) {
-      auto type = isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
-      bindings.emplace_back(b, type, 1, vk::ShaderStageFlagBits::eCompute);
+      bindings.emplace_back(b, descriptorType(b), 1, vk::ShaderStageFlagBits::eCompute);
     }
     setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
     vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::PushConstants));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, push));
-    std::array<vk::DescriptorPoolSize, 2> sizes{
+    std::array<vk::DescriptorPoolSize, 3> sizes{
         vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
-        vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount)};
+        vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount),
+        vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, 4)};
     descriptorPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
     vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*descriptorPool_, layouts));
@@ -105,12 +125,16 @@ void Renderer::setScene(const Scene& scene) {
   uploadArray(sceneBuffers_[gpu::kBindingLights], context_, g.lights, "lights");
   uploadArray(sceneBuffers_[gpu::kBindingSpheres], context_, g.spheres, "spheres");
   uploadArray(sceneBuffers_[gpu::kBindingPlanes], context_, g.planes, "planes");
-  uploadArray(sceneBuffers_[gpu::kBindingTriangles], context_, g.triangles, "triangles");
+  uploadTexels(sceneBuffers_[gpu::kBindingTriangles], context_, g.triangles, vk::Format::eR32G32B32A32Sfloat,
+               "triangles");
   uploadArray(sceneBuffers_[gpu::kBindingPolygons], context_, g.polygons, "polygons");
   uploadArray(sceneBuffers_[gpu::kBindingPolyVertices], context_, g.polyVertices, "polygon vertices");
-  uploadArray(sceneBuffers_[gpu::kBindingNormals], context_, g.normals, "shading normals");
-  uploadArray(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvh.nodes, "BVH nodes");
-  uploadArray(sceneBuffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, "BVH primitive references");
+  uploadTexels(sceneBuffers_[gpu::kBindingNormals], context_, g.normals, vk::Format::eR32G32B32A32Sfloat,
+               "shading normals");
+  uploadTexels(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvh.nodes, vk::Format::eR32G32B32A32Sfloat,
+               "BVH nodes");
+  uploadTexels(sceneBuffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, vk::Format::eR32Uint,
+               "BVH primitive references");
   sceneFitsUbo_ = g.materials.size() <= gpu::kUboMaterials && g.lights.size() <= gpu::kUboLights &&
                   g.spheres.size() <= gpu::kUboSpheres && g.planes.size() <= gpu::kUboPlanes &&
                   g.triangles.size() <= gpu::kUboTriangles && g.polygons.size() <= gpu::kUboPolygons &&
@@ -226,8 +250,14 @@ void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool n
 
 void Renderer::updateDescriptors() {
   std::vector<vk::DescriptorBufferInfo> infos(gpu::kBindingCount);
+  std::vector<vk::BufferView> views(gpu::kBindingCount);
   std::vector<vk::WriteDescriptorSet> writes;
   for (std::uint32_t b = 0; b < gpu::kBindingCount; ++b) {
+    if (isTexelBinding(b)) {
+      views[b] = sceneBuffers_[b]->texelView();
+      writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, nullptr, &views[b]);
+      continue;
+    }
     vk::Buffer handle;
     if (b == gpu::kBindingFrame)
       handle = frameBuffer_->handle();
@@ -240,8 +270,7 @@ void Renderer::updateDescriptors() {
     else
       handle = sceneBuffers_[b]->handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
-    auto type = isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
-    writes.emplace_back(*descriptorSet_, b, 0, 1, type, nullptr, &infos[b]);
+    writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, &infos[b]);
   }
   context_.device().updateDescriptorSets(writes, {});
 }

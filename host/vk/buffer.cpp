@@ -1,6 +1,7 @@
 // Buffer creation, memory-type choice, and staged transfers.
 #include "vk/buffer.h"
 
+#include <algorithm>
 #include <cstring>
 #include <optional>
 
@@ -66,6 +67,42 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags
     memory_ = vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(req.size, *type));
     buffer_.bindMemory(*memory_, 0);
     if (flags & MP::eHostVisible) mapped_ = memory_.mapMemory(0, VK_WHOLE_SIZE);
+  });
+}
+
+namespace {
+
+std::uint32_t texelBytes(vk::Format format) {
+  switch (format) {
+  case vk::Format::eR32G32B32A32Sfloat:
+    return 16;
+  case vk::Format::eR32Uint:
+    return 4;
+  default:
+    throw DeviceError("texel buffer format " + vk::to_string(format) + " is not one vkray uses");
+  }
+}
+
+vk::DeviceSize checkedTexelBytes(const Context& context, vk::DeviceSize size, vk::Format format,
+                                 const std::string& name) {
+  std::uint32_t bytes = texelBytes(format);
+  vk::DeviceSize texels = std::max<vk::DeviceSize>(1, (size + bytes - 1) / bytes);
+  const DeviceInfo& info = context.info();
+  if (texels > info.maxTexelBufferElements) {
+    throw DeviceError(name + " needs " + std::to_string(texels) + " texels but " + info.name + " reads at most " +
+                      std::to_string(info.maxTexelBufferElements) + " per texel buffer (maxTexelBufferElements)");
+  }
+  return texels * bytes;
+}
+
+} // namespace
+
+Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name)
+    : Buffer(context, checkedTexelBytes(context, size, texelFormat, name), vk::BufferUsageFlagBits::eUniformTexelBuffer,
+             use, name) {
+  vulkanStep("creating the texel view of '" + name_ + "'", [&] {
+    view_ =
+        vk::raii::BufferView(context.device(), vk::BufferViewCreateInfo({}, *buffer_, texelFormat, 0, VK_WHOLE_SIZE));
   });
 }
 

@@ -23,11 +23,15 @@ public:
   // size 0 is rounded up (Vulkan forbids empty buffers). A storage buffer larger than the device's
   // maxStorageBufferRange throws, naming the limit.
   Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use, std::string name);
+  // A uniform texel buffer read as texels of `texelFormat` (RGBA32F or R32UI), with its view. More
+  // texels than the device's maxTexelBufferElements throws, naming the limit.
+  Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name);
   Buffer(Buffer&&) noexcept = default;
   Buffer& operator=(Buffer&&) noexcept = default;
   ~Buffer();
 
   vk::Buffer handle() const { return *buffer_; }
+  vk::BufferView texelView() const { return *view_; } // null unless made as a texel buffer
   vk::DeviceSize size() const { return size_; }
   const std::string& name() const { return name_; }
   bool mapped() const { return mapped_ != nullptr; }
@@ -43,6 +47,7 @@ private:
   // Memory outlives the buffer bound to it: declared first, destroyed last.
   vk::raii::DeviceMemory memory_{nullptr};
   vk::raii::Buffer buffer_{nullptr};
+  vk::raii::BufferView view_{nullptr}; // destroyed before the buffer it views
   void* mapped_ = nullptr;
 };
 

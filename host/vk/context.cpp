@@ -76,6 +76,7 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   info.shaderFloat64 = pd.getFeatures().shaderFloat64 == VK_TRUE;
   info.timestamps = props.limits.timestampComputeAndGraphics == VK_TRUE;
   info.maxStorageBufferRange = props.limits.maxStorageBufferRange;
+  info.maxTexelBufferElements = props.limits.maxTexelBufferElements;
   info.maxComputeWorkGroupCount[0] = props.limits.maxComputeWorkGroupCount[0];
   info.maxComputeWorkGroupCount[1] = props.limits.maxComputeWorkGroupCount[1];
   info.maxComputeWorkGroupCount[2] = props.limits.maxComputeWorkGroupCount[2];

@@ -35,6 +35,7 @@ struct DeviceInfo {
   bool shaderFloat64 = false;
   bool timestamps = false;
   std::uint64_t maxStorageBufferRange = 0;
+  std::uint64_t maxTexelBufferElements = 0;
   std::uint64_t maxMemoryAllocationSize = 0;
   std::uint32_t maxComputeWorkGroupCount[3] = {0, 0, 0};
   std::uint32_t maxPushConstantsSize = 0;

@@ -6,10 +6,6 @@
 #include "../shared/gpu_types.h"
 #include "common.glsl"
 
-// Subgroup operations for the packet traversal (traverseBvhPerSubgroup).
-#extension GL_KHR_shader_subgroup_basic : require
-#extension GL_KHR_shader_subgroup_arithmetic : require
-#extension GL_KHR_shader_subgroup_ballot : require
 
 // ---- Specialization: what this scene calls for ---------------------------------------------------
 layout(constant_id = kSpecHasSpheres) const bool HAS_SPHERES = true;
@@ -44,12 +40,16 @@ layout(std430, binding = kBindingMaterials) readonly buffer Materials { Material
 layout(std430, binding = kBindingLights) readonly buffer Lights { Light lights[]; };
 layout(std430, binding = kBindingSpheres) readonly buffer Spheres { Sphere spheres[]; };
 layout(std430, binding = kBindingPlanes) readonly buffer Planes { Plane planes[]; };
-layout(std430, binding = kBindingTriangles) readonly buffer Triangles { Triangle triangles[]; };
 layout(std430, binding = kBindingPolygons) readonly buffer Polygons { Polygon polygons[]; };
 layout(std430, binding = kBindingPolyVertices) readonly buffer PolyVertices { vec4 polyVertices[]; };
-layout(std430, binding = kBindingNormals) readonly buffer Normals { vec4 shadingNormals[]; };
-layout(std430, binding = kBindingBvhNodes) readonly buffer BvhNodes { BvhNode bvhNodes[]; };
-layout(std430, binding = kBindingPrimRefs) readonly buffer PrimRefs { uint primRefs[]; };
+// The mesh-sized arrays are texel buffers: a texel fetch at per-invocation addresses is one vector
+// gather on lavapipe, where a storage-buffer read is a per-lane loop of scalar loads (2-3x slower
+// traversal, docs/performance.md "Meshes"); and a texel buffer may hold maxTexelBufferElements
+// texels (2 GiB of RGBA32F on lavapipe) where a storage buffer is capped at maxStorageBufferRange.
+layout(binding = kBindingTriangles) uniform samplerBuffer triangleTexels;   // 3 per Triangle
+layout(binding = kBindingNormals) uniform samplerBuffer normalTexels;       // 1 per vertex normal
+layout(binding = kBindingBvhNodes) uniform samplerBuffer nodeTexels;        // 2 per BvhNode
+layout(binding = kBindingPrimRefs) uniform usamplerBuffer primRefTexels;    // 1 per reference
 
 layout(std140, binding = kBindingSceneUbo) uniform SceneBlock { SceneUbo small; };
 
@@ -83,8 +83,16 @@ Plane loadPlane(uint i) {
 }
 Triangle loadTriangle(uint i) {
   if (SCENE_IN_UBO) return small.triangles[i];
-  return triangles[i];
+  int t = int(3u * i);
+  return Triangle(texelFetch(triangleTexels, t), texelFetch(triangleTexels, t + 1),
+                  texelFetch(triangleTexels, t + 2));
 }
+BvhNode loadNode(uint i) {
+  vec4 a = texelFetch(nodeTexels, int(2u * i));
+  vec4 b = texelFetch(nodeTexels, int(2u * i + 1u));
+  return BvhNode(a.xyz, floatBitsToUint(a.w), b.xyz, floatBitsToUint(b.w));
+}
+vec3 loadShadingNormal(uint i) { return texelFetch(normalTexels, int(i)).xyz; }
 Polygon loadPolygon(uint i) {
   if (SCENE_IN_UBO) return small.polygons[i];
   return polygons[i];
@@ -221,18 +229,22 @@ void leafPrimitive(uint entry, out uint kind, out uint index) {
     kind = kPrimTriangle;
     index = entry;
   } else {
-    uint ref = primRefs[entry];
+    uint ref = texelFetch(primRefTexels, int(entry)).x;
     kind = ref >> kPrimKindShift;
     index = ref & kPrimIndexMask;
   }
 }
 
-// ---- Traversal for wide SIMD (GPUs): every invocation walks the tree on its own --------------------
+// ---- Traversal: every invocation walks the tree on its own ----------------------------------------
 
 // "While-while" order (Aila & Laine, "Understanding the Efficiency of Ray Traversal on GPUs",
 // HPG 2009): an invocation descends interior nodes until it holds a leaf, then the subgroup tests
 // leaf primitives together, so an iteration of either loop does one kind of work.
-void traverseBvhPerInvocation(TraceRay r, inout Hit hit, bool anyHit) {
+//
+// On lavapipe this beat walking the tree as a subgroup packet (one node read per 8 rays, shared by
+// broadcast; Wald et al. 2001) once nodes became texel fetches: 1.15-1.5x on eye rays and 1.4-2x on
+// shadow rays in `vkray bench meshes` (docs/performance.md, "Meshes").
+void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
   uint stack[kBvhStackSize];
   int sp = 0;
   uint node = 0u;
@@ -242,7 +254,7 @@ void traverseBvhPerInvocation(TraceRay r, inout Hit hit, bool anyHit) {
   bvec3 dirNeg = lessThan(r.ray.dir, vec3(0.0));
   while (!done || leafCount > 0u) {
     while (leafCount == 0u && !done) {
-      BvhNode n = bvhNodes[node];
+      BvhNode n = loadNode(node);
       bool enter = hitsBox(r, n.boundsMin, n.boundsMax, hit.t);
       uint count = n.countAxis & 0xFFFFu;
       if (enter && count == 0u) {
@@ -272,118 +284,6 @@ void traverseBvhPerInvocation(TraceRay r, inout Hit hit, bool anyHit) {
       --leafCount;
       if (anyHit && hit.kind != kNoHit) return;
     }
-  }
-}
-
-// ---- Traversal for narrow SIMD (lavapipe): the subgroup walks the tree together --------------------
-//
-// On lavapipe a storage-buffer read is a loop over the 8 lanes with one scalar load each, and
-// inserting each scalar into the lane's vector stalls on store forwarding (docs/performance.md,
-// "Meshes"): it is the cost of the whole traversal. So the subgroup visits one node at a time, as a
-// packet of rays (Wald et al., "Interactive Rendering with Coherent Ray Tracing", EG 2001): one
-// invocation reads the node or triangle and the others receive it by broadcast; a node is entered
-// when any ray enters it, each ray against its own closest hit so far. Every ray still meets every
-// node and primitive it would meet alone, so the closest hit is the same.
-
-// triangleT() on vertices already at hand.
-float triangleTAt(TraceRay r, vec3 v0, vec3 v1, vec3 v2, float tMax, out vec3 bary) {
-#ifdef VKRAY_FLOAT64
-  return intersectTriangle64(r.ray, v0, v1, v2, tMax, bary);
-#endif
-  return ROBUST ? intersectTriangleRobust(r.ray, r.w, v0, v1, v2, tMax, bary)
-                : intersectTriangleNaive(r.ray, v0, v1, v2, tMax, bary);
-}
-
-// Each iteration reads one record, a node or a leaf's next triangle, so the broadcasts (the
-// dearest part after the reads) are paid once per iteration: lavapipe executes both sides of every
-// branch, so a node step and a triangle test in separate branches would each pay for both.
-void traverseBvhPerSubgroup(TraceRay r, inout Hit hit, bool anyHit) {
-  uint stack[kBvhStackSize];
-  int sp = 0;
-  uint node = 0u;
-  uint leafNext = 0u; // leaf entries still to test: [leafNext, leafEnd)
-  uint leafEnd = 0u;
-  bool stackEmpty = false;
-  bool searching = true; // false once an any-hit ray has its hit
-  // Near child first by the packet's majority direction along the split axis.
-  uint lanes = subgroupAdd(1u);
-  uvec3 negative = uvec3(subgroupAdd(uint(r.ray.dir.x < 0.0)), subgroupAdd(uint(r.ray.dir.y < 0.0)),
-                         subgroupAdd(uint(r.ray.dir.z < 0.0)));
-  bvec3 dirNeg = greaterThan(2u * negative, uvec3(lanes));
-  while (true) {
-    bool primitive = leafNext < leafEnd; // the same in every invocation
-    uint kind = kPrimTriangle;
-    uint index = 0u;
-    if (primitive) leafPrimitive(leafNext, kind, index);
-    // One invocation reads the record; the others receive it.
-    vec3 a = vec3(0.0);
-    vec3 b = vec3(0.0);
-    vec3 c = vec3(0.0);
-    uvec2 meta = uvec2(0u);
-    if (subgroupElect()) {
-      if (!primitive) {
-        BvhNode n = bvhNodes[node];
-        a = n.boundsMin;
-        b = n.boundsMax;
-        meta = uvec2(n.offset, n.countAxis);
-      } else if (kind == kPrimTriangle) {
-        Triangle tri = loadTriangle(index);
-        a = tri.v0.xyz;
-        b = tri.v1.xyz;
-        c = tri.v2.xyz;
-      }
-    }
-    a = subgroupBroadcastFirst(a);
-    b = subgroupBroadcastFirst(b);
-    c = subgroupBroadcastFirst(c);
-    meta = subgroupBroadcastFirst(meta);
-
-    if (primitive) {
-      if (kind == kPrimTriangle) {
-        vec3 bary;
-        float t = triangleTAt(r, a, b, c, hit.t, bary);
-        if (t > 0.0) hit = Hit(t, kPrimTriangle, index, bary);
-      } else {
-        testPrimitive(r, kind, index, hit); // spheres and polygons: each invocation reads its own
-      }
-      ++leafNext;
-      if (anyHit) {
-        searching = searching && hit.kind == kNoHit;
-        if (subgroupOr(uint(searching)) == 0u) break;
-      }
-      if (stackEmpty && leafNext == leafEnd) break;
-      continue;
-    }
-    bool enter = searching && hitsBox(r, a, b, hit.t);
-    bool anyEnter = subgroupOr(uint(enter)) != 0u;
-    uint count = meta.y & 0xFFFFu;
-    if (anyEnter && count == 0u) {
-      uint axis = (meta.y >> 16u) & 3u;
-      stack[sp++] = dirNeg[axis] ? node + 1u : meta.x; // depth <= kBvhStackSize: never overflows
-      node = dirNeg[axis] ? meta.x : node + 1u;
-      continue;
-    }
-    if (anyEnter) {
-      leafNext = meta.x;
-      leafEnd = meta.x + count;
-    }
-    if (sp == 0) {
-      if (leafNext == leafEnd) break;
-      stackEmpty = true;
-    } else {
-      node = stack[--sp];
-    }
-  }
-}
-
-// Closest hit over the BVH's bounded primitives; with anyHit, stops at the first hit found. The
-// subgroup size is a constant of the driver (8 on lavapipe with 256-bit vectors), so only one of
-// the two traversals is compiled.
-void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
-  if (gl_SubgroupSize <= 8u) {
-    traverseBvhPerSubgroup(r, hit, anyHit);
-  } else {
-    traverseBvhPerInvocation(r, hit, anyHit);
   }
 }
 
@@ -456,9 +356,8 @@ Surface surfaceAt(TraceRay r, Hit hit) {
     s.ns = s.ng;
     uint normalBase = floatBitsToUint(tri.v1.w);
     if (SMOOTH_NORMALS && normalBase != kNoNormals) {
-      vec3 n = hit.bary.x * shadingNormals[normalBase].xyz +
-               hit.bary.y * shadingNormals[normalBase + 1u].xyz +
-               hit.bary.z * shadingNormals[normalBase + 2u].xyz;
+      vec3 n = hit.bary.x * loadShadingNormal(normalBase) + hit.bary.y * loadShadingNormal(normalBase + 1u) +
+               hit.bary.z * loadShadingNormal(normalBase + 2u);
       float len = length(n);
       if (len > 0.0) s.ns = n / len; // zero-length interpolated normal: keep the geometric one
     }
