@@ -362,6 +362,55 @@ TEST(BvhBuild, EveryPrimitiveReachableOnceAndBoxesNest) {
   }
 }
 
+// The shader's two-box records (wideBvh) are the same tree: walking them from the root reaches
+// every leaf exactly once, each child's box is the node's own, and an empty or one-leaf tree needs
+// no record.
+TEST(BvhBuild, WideRecordsHoldTheSameTree) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    Bvh bvh = buildBvh(primitivesOf(c.tris));
+    std::vector<gpu::BvhWideNode> wide;
+    std::uint32_t root = wideBvh(bvh, wide);
+    if (bvh.nodes.empty()) {
+      EXPECT_EQ(root, gpu::kBvhNoRef);
+      EXPECT_TRUE(wide.empty());
+      continue;
+    }
+    std::size_t leaves = 0;
+    for (const auto& n : bvh.nodes) leaves += nodeCount(n) != 0;
+    EXPECT_EQ(wide.size(), bvh.nodes.size() - leaves);
+    // Walk both trees together: (wide reference, flat node index).
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> todo{{root, 0u}};
+    std::vector<int> entrySeen(bvh.primRefs.size(), 0);
+    std::size_t leavesSeen = 0;
+    while (!todo.empty()) {
+      auto [ref, flat] = todo.back();
+      todo.pop_back();
+      const gpu::BvhNode& n = bvh.nodes[flat];
+      if (nodeCount(n) != 0) {
+        ASSERT_NE(ref & gpu::kBvhLeafFlag, 0u);
+        EXPECT_EQ(ref & gpu::kBvhLeafFirstMask, n.offset);
+        EXPECT_EQ(((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u, nodeCount(n));
+        for (std::uint32_t e = n.offset; e < n.offset + nodeCount(n); ++e) ++entrySeen[e];
+        ++leavesSeen;
+        continue;
+      }
+      ASSERT_LT(ref, wide.size());
+      const gpu::BvhWideNode& w = wide[ref];
+      const gpu::BvhNode& a = bvh.nodes[flat + 1];
+      const gpu::BvhNode& b = bvh.nodes[n.offset];
+      EXPECT_EQ(w.min0, a.boundsMin);
+      EXPECT_EQ(w.max0, a.boundsMax);
+      EXPECT_EQ(w.min1, b.boundsMin);
+      EXPECT_EQ(w.max1, b.boundsMax);
+      todo.emplace_back(w.ref0, flat + 1);
+      todo.emplace_back(w.ref1, n.offset);
+    }
+    EXPECT_EQ(leavesSeen, leaves);
+    for (int seen : entrySeen) EXPECT_EQ(seen, 1);
+  }
+}
+
 TEST(BvhBuild, ClosestHitsEqualBruteForceBitForBit) {
   for (const Case& c : cases()) {
     SCOPED_TRACE(c.name);

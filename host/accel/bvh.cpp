@@ -455,6 +455,35 @@ Bvh buildBvh(const std::vector<BvhPrimitive>& primitives, const BvhOptions& opti
   return bvh;
 }
 
+std::uint32_t wideBvh(const Bvh& bvh, std::vector<gpu::BvhWideNode>& out) {
+  out.clear();
+  const auto& nodes = bvh.nodes;
+  if (nodes.empty()) return gpu::kBvhNoRef;
+  std::vector<std::uint32_t> record(nodes.size(), gpu::kBvhNoRef);
+  std::uint32_t interior = 0;
+  for (std::size_t i = 0; i < nodes.size(); ++i) {
+    if (nodeCount(nodes[i]) == 0) record[i] = interior++;
+  }
+  auto ref = [&](std::uint32_t i) {
+    std::uint32_t count = nodeCount(nodes[i]);
+    if (count == 0) return record[i];
+    if (count > 16 || nodes[i].offset > gpu::kBvhLeafFirstMask) {
+      throw Error("BVH leaf of " + std::to_string(count) + " entries from entry " + std::to_string(nodes[i].offset) +
+                  " does not fit the shader's leaf reference (at most 16 entries, first below 2^27)");
+    }
+    return gpu::kBvhLeafFlag | (count - 1) << gpu::kBvhLeafCountShift | nodes[i].offset;
+  };
+  out.resize(interior);
+  for (std::uint32_t i = 0; i < nodes.size(); ++i) {
+    if (nodeCount(nodes[i]) != 0) continue;
+    const gpu::BvhNode& a = nodes[i + 1]; // depth first: the first child follows its parent
+    const gpu::BvhNode& b = nodes[nodes[i].offset];
+    out[record[i]] =
+        gpu::BvhWideNode{a.boundsMin, ref(i + 1), a.boundsMax, ref(nodes[i].offset), b.boundsMin, 0u, b.boundsMax, 0u};
+  }
+  return ref(0);
+}
+
 std::string checkBvh(const Bvh& bvh, const std::vector<BvhPrimitive>& primitives, const BvhOptions& options) {
   if (primitives.empty()) return bvh.nodes.empty() && bvh.primRefs.empty() ? "" : "nodes for an empty input";
   if (bvh.nodes.empty()) return "no nodes";

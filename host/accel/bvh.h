@@ -80,6 +80,11 @@ Bvh buildBvh(const std::vector<BvhPrimitive>& primitives, const BvhOptions& opti
 // violation in words. Used by the tests; cheap enough for a debug assertion.
 std::string checkBvh(const Bvh& bvh, const std::vector<BvhPrimitive>& primitives, const BvhOptions& options = {});
 
+// The shader's layout of a flattened tree (gpu::BvhWideNode): one record per interior node, in the
+// same depth-first order, with both children's boxes and references. Returns the root's reference
+// (kBvhNoRef for an empty tree; a leaf reference for a one-leaf tree, which needs no record).
+std::uint32_t wideBvh(const Bvh& bvh, std::vector<gpu::BvhWideNode>& out);
+
 // Bounds of a node as the shader sees them.
 inline Aabb nodeBounds(const gpu::BvhNode& n) {
   return Aabb{n.boundsMin, n.boundsMax};

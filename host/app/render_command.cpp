@@ -134,7 +134,8 @@ int runRender(const RenderArgs& args) {
       std::printf("bvh nodes: %zu\n", b.nodes);
       std::printf("bvh depth: %d\n", b.depth);
       std::size_t tris = renderer.gpuScene().triangles.size();
-      std::size_t bvhBytes = renderer.gpuScene().bvh.nodes.size() * sizeof(gpu::BvhNode) +
+      // What the shader reads: the two-box records (one per interior node) and the leaf references.
+      std::size_t bvhBytes = renderer.gpuScene().bvhNodes.size() * sizeof(gpu::BvhWideNode) +
                              renderer.gpuScene().bvh.primRefs.size() * sizeof(std::uint32_t);
       std::printf("bvh bytes: %zu\n", bvhBytes);
       if (tris > 0)

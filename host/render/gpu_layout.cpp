@@ -18,6 +18,7 @@ static_assert(sizeof(Polygon) == 32 && offsetof(Polygon, meta) == 16);
 static_assert(sizeof(BvhNode) == 32);
 static_assert(offsetof(BvhNode, offset) == 12 && offsetof(BvhNode, boundsMax) == 16 &&
               offsetof(BvhNode, countAxis) == 28);
+static_assert(sizeof(BvhWideNode) == 64 && offsetof(BvhWideNode, ref1) == 28 && offsetof(BvhWideNode, max1) == 48);
 static_assert(sizeof(FrameParams) == 11 * 16);
 static_assert(offsetof(FrameParams, knobs) == 112 && offsetof(FrameParams, imageSize) == 128);
 static_assert(offsetof(FrameParams, counts) == 144 && offsetof(FrameParams, counts2) == 160);

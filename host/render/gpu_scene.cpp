@@ -96,7 +96,7 @@ std::size_t GpuScene::bytes() const {
   return materials.size() * sizeof(gpu::Material) + lights.size() * sizeof(gpu::Light) +
          spheres.size() * sizeof(gpu::Sphere) + planes.size() * sizeof(gpu::Plane) +
          triangles.size() * sizeof(gpu::Triangle) + polygons.size() * sizeof(gpu::Polygon) +
-         (polyVertices.size() + normals.size()) * sizeof(glm::vec4) + bvh.nodes.size() * sizeof(gpu::BvhNode) +
+         (polyVertices.size() + normals.size()) * sizeof(glm::vec4) + bvhNodes.size() * sizeof(gpu::BvhWideNode) +
          bvh.primRefs.size() * sizeof(std::uint32_t);
 }
 
@@ -160,6 +160,7 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     auto start = std::chrono::steady_clock::now();
     g.bvh = buildBvh(bvhPrimitives(scene, g), bvhOptions);
     orderByLeaves(g);
+    g.bvhRoot = wideBvh(g.bvh, g.bvhNodes);
     // Build time as --stats reports it: from packed primitives to the final arrays.
     g.bvh.stats.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
   }

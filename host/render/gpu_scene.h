@@ -28,6 +28,9 @@ struct GpuScene {
   std::vector<glm::vec4> polyVertices;
   std::vector<glm::vec4> normals;
   Bvh bvh; // empty unless asked for
+  // The BVH in the shader's layout (wideBvh) and its root reference.
+  std::vector<gpu::BvhWideNode> bvhNodes;
+  std::uint32_t bvhRoot = gpu::kBvhNoRef;
 
   std::size_t bytes() const;
 };

@@ -131,7 +131,7 @@ void Renderer::setScene(const Scene& scene) {
   uploadArray(sceneBuffers_[gpu::kBindingPolyVertices], context_, g.polyVertices, "polygon vertices");
   uploadTexels(sceneBuffers_[gpu::kBindingNormals], context_, g.normals, vk::Format::eR32G32B32A32Sfloat,
                "shading normals");
-  uploadTexels(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvh.nodes, vk::Format::eR32G32B32A32Sfloat,
+  uploadTexels(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvhNodes, vk::Format::eR32G32B32A32Sfloat,
                "BVH nodes");
   uploadTexels(sceneBuffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, vk::Format::eR32Uint,
                "BVH primitive references");
@@ -290,7 +290,8 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.imageSize = glm::uvec4(s.width, s.height, 0u, static_cast<std::uint32_t>(f.reflection ? f.usableDepth : 0));
   p.counts = glm::uvec4(gpuScene_.spheres.size(), gpuScene_.planes.size(), gpuScene_.triangles.size(),
                         gpuScene_.polygons.size());
-  p.counts2 = glm::uvec4(gpuScene_.lights.size(), gpuScene_.bvh.nodes.size(), gpuScene_.occluderPlanes, 0u);
+  p.counts2 =
+      glm::uvec4(gpuScene_.lights.size(), gpuScene_.bvh.nodes.size(), gpuScene_.occluderPlanes, gpuScene_.bvhRoot);
   frameBuffer_->write(&p, sizeof p);
   frameWidth_ = s.width;
   frameHeight_ = s.height;

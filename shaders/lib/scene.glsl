@@ -6,7 +6,6 @@
 #include "../shared/gpu_types.h"
 #include "common.glsl"
 
-
 // ---- Specialization: what this scene calls for ---------------------------------------------------
 layout(constant_id = kSpecHasSpheres) const bool HAS_SPHERES = true;
 layout(constant_id = kSpecHasPlanes) const bool HAS_PLANES = true;
@@ -48,7 +47,7 @@ layout(std430, binding = kBindingPolyVertices) readonly buffer PolyVertices { ve
 // texels (2 GiB of RGBA32F on lavapipe) where a storage buffer is capped at maxStorageBufferRange.
 layout(binding = kBindingTriangles) uniform samplerBuffer triangleTexels;   // 3 per Triangle
 layout(binding = kBindingNormals) uniform samplerBuffer normalTexels;       // 1 per vertex normal
-layout(binding = kBindingBvhNodes) uniform samplerBuffer nodeTexels;        // 2 per BvhNode
+layout(binding = kBindingBvhNodes) uniform samplerBuffer nodeTexels;        // 4 per BvhWideNode
 layout(binding = kBindingPrimRefs) uniform usamplerBuffer primRefTexels;    // 1 per reference
 
 layout(std140, binding = kBindingSceneUbo) uniform SceneBlock { SceneUbo small; };
@@ -86,11 +85,6 @@ Triangle loadTriangle(uint i) {
   int t = int(3u * i);
   return Triangle(texelFetch(triangleTexels, t), texelFetch(triangleTexels, t + 1),
                   texelFetch(triangleTexels, t + 2));
-}
-BvhNode loadNode(uint i) {
-  vec4 a = texelFetch(nodeTexels, int(2u * i));
-  vec4 b = texelFetch(nodeTexels, int(2u * i + 1u));
-  return BvhNode(a.xyz, floatBitsToUint(a.w), b.xyz, floatBitsToUint(b.w));
 }
 vec3 loadShadingNormal(uint i) { return texelFetch(normalTexels, int(i)).xyz; }
 Polygon loadPolygon(uint i) {
@@ -206,19 +200,6 @@ void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
   }
 }
 
-// Slab test against a node's box. The far distance is widened by 1 + 2 gamma(3) so rounding in
-// the slab arithmetic never culls a box the ray truly touches (Ize, "Robust BVH Ray Traversal",
-// JCGT 2(2), 2013): without it a ray along a shared mesh edge can miss both triangles' boxes.
-bool hitsBox(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
-  vec3 t0 = (bmin - r.ray.origin) * r.invDir;
-  vec3 t1 = (bmax - r.ray.origin) * r.invDir;
-  vec3 tNear = min(t0, t1);
-  vec3 tFar = max(t0, t1);
-  float enter = max(max(tNear.x, tNear.y), max(tNear.z, 0.0));
-  float leave = min(min(tFar.x, tFar.y), min(tFar.z, tMax)) * 1.0000003576;
-  return enter <= leave;
-}
-
 const int kBvhStackSize = 32; // the builder caps tree depth at this (host/accel/bvh.h)
 
 // A BVH leaf entry: the primitive's kind and index. In a scene whose bounded primitives are all
@@ -237,53 +218,67 @@ void leafPrimitive(uint entry, out uint kind, out uint index) {
 
 // ---- Traversal: every invocation walks the tree on its own ----------------------------------------
 
+// Entry distance of the ray into a box, +inf when it misses it or enters beyond tMax. The far
+// distance is widened by 1 + 2 gamma(3) so rounding in the slab arithmetic never culls a box the ray
+// truly touches (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013): without it a ray along a shared
+// mesh edge can miss both triangles' boxes.
+float boxEntry(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
+  vec3 t0 = (bmin - r.ray.origin) * r.invDir;
+  vec3 t1 = (bmax - r.ray.origin) * r.invDir;
+  vec3 tNear = min(t0, t1);
+  vec3 tFar = max(t0, t1);
+  float enter = max(max(tNear.x, tNear.y), max(tNear.z, 0.0));
+  float leave = min(min(tFar.x, tFar.y), min(tFar.z, tMax)) * 1.0000003576;
+  return enter <= leave ? enter : uintBitsToFloat(0x7F800000u);
+}
+
 // "While-while" order (Aila & Laine, "Understanding the Efficiency of Ray Traversal on GPUs",
-// HPG 2009): an invocation descends interior nodes until it holds a leaf, then the subgroup tests
-// leaf primitives together, so an iteration of either loop does one kind of work.
+// HPG 2009): an invocation descends interior records until it holds a leaf, then tests the leaf's
+// primitives. Each record holds both children's boxes (BvhWideNode), so a step tests the two, goes
+// to the nearer child entered and stacks the other only when both are; a missed child costs no step.
 //
-// On lavapipe this beat walking the tree as a subgroup packet (one node read per 8 rays, shared by
-// broadcast; Wald et al. 2001) once nodes became texel fetches: 1.15-1.5x on eye rays and 1.4-2x on
-// shadow rays in `vkray bench meshes` (docs/performance.md, "Meshes").
+// On lavapipe this beats walking the tree as a subgroup packet (one node read per 8 rays, shared by
+// broadcast; Wald et al. 2001), which vkray did while nodes were storage-buffer reads
+// (docs/performance.md, "Meshes").
 void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
   uint stack[kBvhStackSize];
   int sp = 0;
-  uint node = 0u;
-  uint leafFirst = 0u;
-  uint leafCount = 0u;
-  bool done = false;
-  bvec3 dirNeg = lessThan(r.ray.dir, vec3(0.0));
-  while (!done || leafCount > 0u) {
-    while (leafCount == 0u && !done) {
-      BvhNode n = loadNode(node);
-      bool enter = hitsBox(r, n.boundsMin, n.boundsMax, hit.t);
-      uint count = n.countAxis & 0xFFFFu;
-      if (enter && count == 0u) {
-        // Visit the child on the near side of the split first; the far one waits on the stack
-        // (the builder caps the depth at kBvhStackSize, so it never overflows).
-        uint axis = (n.countAxis >> 16u) & 3u;
-        stack[sp++] = dirNeg[axis] ? node + 1u : n.offset;
-        node = dirNeg[axis] ? n.offset : node + 1u;
+  uint ref = opaqueUniform(frame.counts2.w); // the root
+  while (ref != kBvhNoRef) {
+    while (ref < kBvhLeafFlag) {
+      int base = int(4u * ref);
+      vec4 a = texelFetch(nodeTexels, base);
+      vec4 b = texelFetch(nodeTexels, base + 1);
+      vec4 c = texelFetch(nodeTexels, base + 2);
+      vec4 d = texelFetch(nodeTexels, base + 3);
+      float enter0 = boxEntry(r, a.xyz, b.xyz, hit.t);
+      float enter1 = boxEntry(r, c.xyz, d.xyz, hit.t);
+      uint ref0 = floatBitsToUint(a.w);
+      uint ref1 = floatBitsToUint(b.w);
+      bool in0 = !isinf(enter0);
+      bool in1 = !isinf(enter1);
+      if (in0 && in1) {
+        // The builder caps the depth at kBvhStackSize, so the stack never overflows.
+        bool firstNearer = enter0 <= enter1;
+        stack[sp++] = firstNearer ? ref1 : ref0;
+        ref = firstNearer ? ref0 : ref1;
+      } else if (in0 || in1) {
+        ref = in0 ? ref0 : ref1;
       } else {
-        if (enter) {
-          leafFirst = n.offset;
-          leafCount = count;
-        }
-        if (sp == 0) {
-          done = true;
-        } else {
-          node = stack[--sp];
-        }
+        ref = sp > 0 ? stack[--sp] : kBvhNoRef;
       }
     }
-    while (leafCount > 0u) {
+    if (ref == kBvhNoRef) break;
+    uint entry = ref & kBvhLeafFirstMask;
+    uint end = entry + ((ref >> kBvhLeafCountShift) & 15u) + 1u;
+    for (; entry < end; ++entry) {
       uint kind;
       uint index;
-      leafPrimitive(leafFirst, kind, index);
+      leafPrimitive(entry, kind, index);
       testPrimitive(r, kind, index, hit);
-      ++leafFirst;
-      --leafCount;
       if (anyHit && hit.kind != kNoHit) return;
     }
+    ref = sp > 0 ? stack[--sp] : kBvhNoRef;
   }
 }
 

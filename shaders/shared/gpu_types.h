@@ -109,6 +109,11 @@ VKRAY_CONST(uint, kPrimTriangle, 1u);
 VKRAY_CONST(uint, kPrimPolygon, 2u);
 VKRAY_CONST(uint, kPrimKindShift, 30u);
 VKRAY_CONST(uint, kPrimIndexMask, 0x3FFFFFFFu);
+// BvhWideNode references (see there).
+VKRAY_CONST(uint, kBvhLeafFlag, 0x80000000u);
+VKRAY_CONST(uint, kBvhLeafCountShift, 27u); // 4 bits: leaves of 1 to 16 entries
+VKRAY_CONST(uint, kBvhLeafFirstMask, 0x07FFFFFFu);
+VKRAY_CONST(uint, kBvhNoRef, 0xFFFFFFFFu); // an empty tree's root
 VKRAY_CONST(uint, kPrimPlane, 3u); // never in the BVH; used to tag hits
 
 // ---- Render passes (push constant `pass`) and flags -----------------------------------------------
@@ -162,6 +167,22 @@ struct BvhNode {
   uint countAxis; // bits 0..15: primitive count (0: interior); bits 16..17: split axis
 };
 
+// The BVH as the shader walks it: one record per interior node of the tree above, holding both
+// children's boxes and references (Aila & Laine, "Understanding the Efficiency of Ray Traversal on
+// GPUs", HPG 2009), so a step tests two boxes, goes to the nearer child entered and stacks the other
+// only when both are. A reference is an interior record's index, or kBvhLeafFlag | (count - 1) <<
+// kBvhLeafCountShift | first leaf entry.
+struct BvhWideNode {
+  vec3 min0;
+  uint ref0;
+  vec3 max0;
+  uint ref1;
+  vec3 min1;
+  uint unused0;
+  vec3 max1;
+  uint unused1;
+};
+
 struct SceneUbo {
   Material materials[kUboMaterials];
   Light lights[kUboLights];
@@ -183,7 +204,7 @@ struct FrameParams {
   vec4 knobs;         // x: bailout weight; y: adaptive AA threshold; zw: unused
   uvec4 imageSize;    // x: width; y: height; z: unused; w: max depth (bounces after the eye ray)
   uvec4 counts;       // x: spheres; y: planes; z: triangles; w: polygons
-  uvec4 counts2;      // x: lights; y: BVH nodes; z: planes that can cast shadows (first in Planes[]); w: unused
+  uvec4 counts2;      // x: lights; y: BVH nodes; z: planes that can cast shadows (first in Planes[]); w: BVH root reference
 };
 
 struct RayStats {
