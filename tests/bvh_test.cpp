@@ -623,5 +623,48 @@ TEST(GpuBvh, ShadowsEqualBruteForce) {
   EXPECT_GT(shadowed, 200) << "the scene must have shadows to compare";
 }
 
+// The ray-query kernel `vkray bench meshes` times against Embree (shaders/hits.comp) must do the
+// renderer's work: the same eye rays hit the same kind of primitive, and a pixel the renderer draws
+// in shadow is one whose shadow ray the query kernel finds blocked.
+TEST(GpuBvh, QueryKernelAgreesWithTheRenderer) {
+  auto tris = torus(48, 24);
+  Image ids = test::render(idScene(tris, false, BvhMode::On)).image;
+  Scene lit = idScene(tris, true, BvhMode::On);
+  Image shadowed = test::render(lit).image;
+  Scene unshadowed = lit;
+  unshadowed.lights[0].shadows = false;
+  Image unlit = test::render(unshadowed).image;
+  RenderOptions query;
+  query.kernel = Kernel::Hits;
+  RenderResult hits = test::render(lit, query);
+  test::expectNoValidationMessages();
+  ASSERT_EQ(hits.hits.size(), ids.pixels.size());
+  const std::uint32_t triangles = static_cast<std::uint32_t>(tris.size());
+  std::size_t blocked = 0, drawnInShadow = 0, hitCount = 0;
+  for (std::size_t i = 0; i < ids.pixels.size(); ++i) {
+    const glm::vec4& h = hits.hits[i];
+    if (ids.pixels[i] == glm::vec3(0.0f)) {
+      EXPECT_EQ(h.x, -1.0f) << "pixel " << i << ": the query kernel hit what the renderer missed";
+      EXPECT_EQ(h.w, -1.0f) << "pixel " << i;
+      continue;
+    }
+    ++hitCount;
+    EXPECT_GT(h.x, 0.0f) << "pixel " << i;
+    std::uint32_t id = colorId(ids.pixels[i]);
+    std::uint32_t kind = id < triangles       ? gpu::kPrimTriangle
+                         : id < triangles + 6 ? gpu::kPrimSphere
+                                              : gpu::kPrimPolygon;
+    EXPECT_EQ(static_cast<std::uint32_t>(h.y), kind) << "pixel " << i;
+    bool dark = shadowed.pixels[i] != unlit.pixels[i];
+    blocked += h.w > 0.0f;
+    drawnInShadow += dark;
+    if (dark) EXPECT_EQ(h.w, 1.0f) << "pixel " << i << ": drawn in shadow, but its shadow ray was not blocked";
+  }
+  EXPECT_GT(hitCount, 3000u);
+  EXPECT_GT(drawnInShadow, 200u) << "the scene must have shadows to compare";
+  // A blocked ray whose light adds less than a rounding step leaves the pixel unchanged.
+  EXPECT_LE(blocked - drawnInShadow, blocked / 100) << blocked << " blocked, " << drawnInShadow << " drawn dark";
+}
+
 } // namespace
 } // namespace vkray

@@ -109,12 +109,23 @@ struct Row {
   std::size_t nodes = 0;
   int depth = 0;
   double bytesPerTriangle = 0.0;
-  double primaryMs = 0.0;    // GPU time of eye rays + shading
-  double shadowMs = 0.0;     // GPU time the shadow rays add
+  // The ray queries alone (shaders/hits.comp), the work Embree is asked for.
+  double primaryMs = 0.0;    // GPU time of the eye rays' closest hits
+  double shadowMs = 0.0;     // GPU time the shadow rays add (any-hit)
   double primaryCpuMs = 0.0; // process CPU time of the same (lavapipe: all worker threads)
   double shadowCpuMs = 0.0;
   std::uint64_t eyeRays = 0;
   std::uint64_t shadowRays = 0;
+  std::uint64_t occluded = 0;
+  // The renderer's kernel on the same eye rays: closest hit plus shading and the image.
+  double renderMs = 0.0;
+  double renderCpuMs = 0.0;
+  // Agreement with Embree on the same rays.
+  std::uint64_t hitsDiffer = 0;    // pixels one hits and the other misses
+  double maxRelativeTDiff = 0.0;   // over pixels both hit
+  std::uint64_t farApart = 0;      // pixels both hit more than 1e-3 (relative) apart: different surfaces
+  std::uint64_t shadowsDiffer = 0; // pixels lit by one and shadowed by the other
+  std::uint64_t embreeOccluded = 0;
   // Embree (0 when not measured)
   double embreeBuildMs = 0.0;
   double embreeBytesPerTriangle = 0.0;
@@ -125,6 +136,7 @@ struct Row {
 
   double primaryMrays() const { return primaryMs > 0 ? eyeRays / (primaryMs * 1e3) : 0.0; }
   double shadowMrays() const { return shadowMs > 0 ? shadowRays / (shadowMs * 1e3) : 0.0; }
+  double renderMrays() const { return renderMs > 0 ? eyeRays / (renderMs * 1e3) : 0.0; }
   double embreePrimaryMrays() const { return embreePrimaryMs > 0 ? eyeRays / (embreePrimaryMs * 1e3) : 0.0; }
   double embreeShadowMrays() const { return embreeShadowMs > 0 ? embreeShadowRays / (embreeShadowMs * 1e3) : 0.0; }
 };
@@ -141,7 +153,10 @@ bool embreeMemoryMonitor(void*, ssize_t bytes, bool) {
 // The same float triangles (camera-relative, as packed for the GPU) and the same rays: eye rays
 // through pixel centres, then a shadow ray from every hit that faces the light. Both phases run on
 // all cores (as lavapipe does), one rtcIntersect1 / rtcOccluded1 per ray.
-void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& args, Row& row) {
+// Traces the kernel's rays with Embree and compares the hits with `vkHits` (the query kernel's
+// records, shaders/hits.comp).
+void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& args, const std::vector<glm::vec4>& vkHits,
+               Row& row) {
   RTCDevice device = rtcNewDevice(nullptr);
   if (!device) throw Error("embree: rtcNewDevice failed");
   rtcSetDeviceMemoryMonitorFunction(device, embreeMemoryMonitor, nullptr);
@@ -210,6 +225,8 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
   std::vector<double> shadowTimes;
   std::atomic<std::uint64_t> shadowRays{0};
   std::atomic<std::uint64_t> hits{0};
+  std::atomic<std::uint64_t> occluded{0};
+  std::vector<signed char> shadowed(hitT.size(), -1); // -1 no shadow ray, 0 lit, 1 occluded
   for (int run = 0; run < std::max(1, args.runs); ++run) {
     auto t0 = Clock::now();
     parallelRows([&](RTCIntersectContext& context, std::uint32_t y) {
@@ -233,10 +250,12 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
     primaryTimes.push_back(msSince(t0));
     shadowRays = 0;
     hits = 0;
+    occluded = 0;
     t0 = Clock::now();
     parallelRows([&](RTCIntersectContext& context, std::uint32_t y) {
       std::uint64_t localRays = 0;
       std::uint64_t localHits = 0;
+      std::uint64_t localOccluded = 0;
       for (std::uint32_t x = 0; x < w; ++x) {
         std::size_t i = static_cast<std::size_t>(y) * w + x;
         if (hitT[i] < 0.0f) continue;
@@ -259,9 +278,12 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
         ray.tfar = 1.0f;
         ray.mask = 0xFFFFFFFFu;
         rtcOccluded1(rtcScene, &context, &ray);
+        shadowed[i] = ray.tfar < 0.0f ? 1 : 0; // Embree sets tfar to -inf on a hit
+        localOccluded += shadowed[i];
       }
       shadowRays += localRays;
       hits += localHits;
+      occluded += localOccluded;
     });
     shadowTimes.push_back(msSince(t0));
   }
@@ -269,6 +291,20 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
   row.embreeShadowMs = median(shadowTimes);
   row.embreeShadowRays = shadowRays.load();
   row.embreeHits = hits.load();
+  row.embreeOccluded = occluded.load();
+  for (std::size_t i = 0; i < hitT.size() && i < vkHits.size(); ++i) {
+    int vkShadow = vkHits[i].w < 0.0f ? -1 : vkHits[i].w > 0.0f ? 1 : 0;
+    row.shadowsDiffer += vkShadow != shadowed[i];
+    bool vkHit = vkHits[i].x > 0.0f;
+    bool embreeHit = hitT[i] >= 0.0f;
+    if (vkHit != embreeHit) {
+      ++row.hitsDiffer;
+    } else if (vkHit) {
+      double rel = std::abs(static_cast<double>(vkHits[i].x) - hitT[i]) / static_cast<double>(hitT[i]);
+      row.maxRelativeTDiff = std::max(row.maxRelativeTDiff, rel);
+      row.farApart += rel > 1e-3;
+    }
+  }
   rtcReleaseScene(rtcScene);
   rtcReleaseDevice(device);
 }
@@ -314,19 +350,32 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
                               g.bvhNodes.size() * sizeof(gpu::BvhWideNode) +
                               g.bvh.primRefs.size() * sizeof(std::uint32_t)) /
           static_cast<double>(row.triangles);
-      // One counted render (ray counts; builds the pipelines), one warm-up, then the timed runs.
-      TimedRender t = timeRender(renderer, scene, scene.render, options, 1, 1);
-      auto [gpuMs, cpuMs] = timeRenders(renderer, scene, options, args.runs);
+      if (pass == 0) {
+        // The renderer's own kernel on the eye rays: one counted render (builds the pipeline), one
+        // warm-up, then the timed runs.
+        TimedRender t = timeRender(renderer, scene, scene.render, options, 1, 1);
+        auto [renderMs, renderCpuMs] = timeRenders(renderer, scene, options, args.runs);
+        row.renderMs = renderMs;
+        row.renderCpuMs = renderCpuMs;
+        row.eyeRays = t.stats.eye;
+      }
+      // The ray queries alone: one render builds the pipeline and gives the hits, then the runs.
+      RenderOptions query = options;
+      query.kernel = Kernel::Hits;
+      RenderResult hits = renderer.render(scene.camera, scene.render, query);
+      auto [gpuMs, cpuMs] = timeRenders(renderer, scene, query, args.runs);
       if (pass == 0) {
         row.primaryMs = gpuMs;
         row.primaryCpuMs = cpuMs;
-        row.eyeRays = t.stats.eye;
       } else {
         row.shadowMs = std::max(1e-3, gpuMs - row.primaryMs);
         row.shadowCpuMs = std::max(1e-3, cpuMs - row.primaryCpuMs);
-        row.shadowRays = t.stats.shadow;
+        for (const glm::vec4& h : hits.hits) {
+          row.shadowRays += h.w >= 0.0f;
+          row.occluded += h.w > 0.0f;
+        }
 #ifdef VKRAY_HAVE_EMBREE
-        if (embree) runEmbree(g, scene, args, row);
+        if (embree) runEmbree(g, scene, args, hits.hits, row);
 #endif
       }
     }
@@ -342,23 +391,26 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
     std::fflush(stdout);
   }
 
-  std::printf("\n%10s %9s %9s %6s %8s %9s %9s %9s %9s %9s", "triangles", "build ms", "nodes", "depth", "B/tri",
-              "eye ms", "eye cpu", "eye Mr/s", "shd Mr/s", "rays");
+  std::printf("\n%10s %9s %9s %6s %8s %9s %9s %9s %9s %9s %9s", "triangles", "build ms", "nodes", "depth", "B/tri",
+              "eye ms", "eye cpu", "eye Mr/s", "shd Mr/s", "rays", "rend Mr/s");
   if (embree)
-    std::printf(" | %9s %8s %9s %9s %8s %8s", "emb build", "emb B/t", "emb eye", "emb shd", "eye x", "build x");
+    std::printf(" | %9s %8s %9s %9s %8s %8s %8s", "emb build", "emb B/t", "emb eye", "emb shd", "eye x", "rend x",
+                "build x");
   std::printf("\n");
   for (const Row& r : rows) {
-    std::printf("%10zu %9.1f %9zu %6d %8.1f %9.2f %9.1f %9.2f %9.2f %9llu", r.triangles, r.buildMs, r.nodes, r.depth,
-                r.bytesPerTriangle, r.primaryMs, r.primaryCpuMs, r.primaryMrays(), r.shadowMrays(),
-                static_cast<unsigned long long>(r.eyeRays + r.shadowRays));
+    std::printf("%10zu %9.1f %9zu %6d %8.1f %9.2f %9.1f %9.2f %9.2f %9llu %9.2f", r.triangles, r.buildMs, r.nodes,
+                r.depth, r.bytesPerTriangle, r.primaryMs, r.primaryCpuMs, r.primaryMrays(), r.shadowMrays(),
+                static_cast<unsigned long long>(r.eyeRays + r.shadowRays), r.renderMrays());
     if (embree) {
-      std::printf(" | %9.1f %8.1f %9.2f %9.2f %8.2f %8.2f", r.embreeBuildMs, r.embreeBytesPerTriangle,
-                  r.embreePrimaryMrays(), r.embreeShadowMrays(),
-                  r.embreePrimaryMrays() > 0 ? r.primaryMrays() / r.embreePrimaryMrays() : 0.0,
+      double e = r.embreePrimaryMrays();
+      std::printf(" | %9.1f %8.1f %9.2f %9.2f %8.2f %8.2f %8.2f", r.embreeBuildMs, r.embreeBytesPerTriangle, e,
+                  r.embreeShadowMrays(), e > 0 ? r.primaryMrays() / e : 0.0, e > 0 ? r.renderMrays() / e : 0.0,
                   r.embreeBuildMs > 0 ? r.buildMs / r.embreeBuildMs : 0.0);
     }
     std::printf("\n");
   }
+  std::printf("eye/shd: the ray queries alone (shaders/hits.comp), as Embree is asked; rend: the renderer's kernel\n"
+              "(closest hit + shading + image) on the same eye rays\n");
   if (rows.size() >= 2 && rows.front().primaryMs > 0) {
     const Row& a = rows.front();
     const Row& b = rows.back();
@@ -366,13 +418,15 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
                 b.primaryMs / a.primaryMs, static_cast<double>(b.triangles) / a.triangles);
   }
   if (embree) {
-    std::printf("columns 'eye x' and 'build x': vkray eye-ray throughput / Embree's, vkray build time / Embree's\n");
+    std::printf("columns 'eye x', 'rend x' and 'build x': vkray eye-ray throughput / Embree's (queries alone, and\n"
+                "the renderer's kernel), vkray build time / Embree's\n");
     for (const Row& r : rows) {
-      if (r.embreeHits > 0 && r.shadowRays > 0) {
-        std::printf("  %zu triangles: shadow rays vkray %llu, embree %llu (same hits, offsets differ slightly)\n",
-                    r.triangles, static_cast<unsigned long long>(r.shadowRays),
-                    static_cast<unsigned long long>(r.embreeShadowRays));
-      }
+      auto u = [](std::uint64_t v) { return static_cast<unsigned long long>(v); };
+      std::printf("  %zu triangles: of %llu eye rays, %llu hit where Embree's miss or the reverse, %llu hit another "
+                  "surface (t > 1e-3 apart; largest relative difference %.1e); shadow rays vkray %llu, Embree %llu; "
+                  "occluded vkray %llu, Embree %llu; %llu pixels shadowed differently\n",
+                  r.triangles, u(r.eyeRays), u(r.hitsDiffer), u(r.farApart), r.maxRelativeTDiff, u(r.shadowRays),
+                  u(r.embreeShadowRays), u(r.occluded), u(r.embreeOccluded), u(r.shadowsDiffer));
     }
   }
 
@@ -381,12 +435,13 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
     if (!out) throw InputError(args.csv.string(), "cannot open for writing");
     out << "triangles,build_ms,nodes,depth,bytes_per_triangle,eye_ms,eye_cpu_ms,shadow_cpu_ms,eye_mrays,shadow_mrays,"
            "embree_build_ms,"
-           "embree_bytes_per_triangle,embree_eye_mrays,embree_shadow_mrays\n";
+           "embree_bytes_per_triangle,embree_eye_mrays,embree_shadow_mrays,render_eye_ms,render_eye_mrays\n";
     for (const Row& r : rows) {
       out << r.triangles << ',' << r.buildMs << ',' << r.nodes << ',' << r.depth << ',' << r.bytesPerTriangle << ','
           << r.primaryMs << ',' << r.primaryCpuMs << ',' << r.shadowCpuMs << ',' << r.primaryMrays() << ','
           << r.shadowMrays() << ',' << r.embreeBuildMs << ',' << r.embreeBytesPerTriangle << ','
-          << r.embreePrimaryMrays() << ',' << r.embreeShadowMrays() << '\n';
+          << r.embreePrimaryMrays() << ',' << r.embreeShadowMrays() << ',' << r.renderMs << ',' << r.renderMrays()
+          << '\n';
     }
     std::printf("wrote %s\n", args.csv.string().c_str());
   }

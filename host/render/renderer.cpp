@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "hits_spv.h"    // kHitsSpv: shaders/hits.comp, the ray queries alone
 #include "trace64_spv.h" // kTrace64Spv: the same, intersecting in double (-DVKRAY_FLOAT64)
 #include "trace_spv.h"   // kTraceSpv: shaders/trace.comp compiled at build time
 #include "util/error.h"
@@ -209,9 +210,9 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   return spec;
 }
 
-const vulkan::ComputePipeline& Renderer::pipelineFor(Precision precision, const vulkan::Specialization& spec,
-                                                     bool& reused) {
-  auto key = std::make_pair(precision, spec);
+const vulkan::ComputePipeline& Renderer::pipelineFor(Kernel kernel, Precision precision,
+                                                     const vulkan::Specialization& spec, bool& reused) {
+  auto key = std::make_tuple(kernel, precision, spec);
   auto it = pipelines_.find(key);
   reused = it != pipelines_.end();
   if (!reused) {
@@ -219,10 +220,13 @@ const vulkan::ComputePipeline& Renderer::pipelineFor(Precision precision, const 
     if (f64 && !context_.float64Enabled()) {
       throw InputError("render.precision", "float64 needs shaderFloat64, which " + context_.info().name + " lacks");
     }
-    std::span<const std::uint32_t> code =
-        f64 ? std::span<const std::uint32_t>(kTrace64Spv) : std::span<const std::uint32_t>(kTraceSpv);
-    auto pipeline = std::make_unique<vulkan::ComputePipeline>(
-        context_, code, *pipelineLayout_, spec, cache_ ? &cache_->cache() : nullptr, f64 ? "trace (float64)" : "trace");
+    if (f64 && kernel == Kernel::Hits) throw InputError("render.precision", "the ray-query kernel is float32 only");
+    std::span<const std::uint32_t> code = kernel == Kernel::Hits ? std::span<const std::uint32_t>(kHitsSpv)
+                                          : f64                  ? std::span<const std::uint32_t>(kTrace64Spv)
+                                                                 : std::span<const std::uint32_t>(kTraceSpv);
+    const char* name = kernel == Kernel::Hits ? "hits" : f64 ? "trace (float64)" : "trace";
+    auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, code, *pipelineLayout_, spec,
+                                                              cache_ ? &cache_->cache() : nullptr, name);
     it = pipelines_.emplace(key, std::move(pipeline)).first;
     if (cache_) cache_->save();
   }
@@ -358,8 +362,12 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
 
   const std::uint32_t width = settings.width;
   const std::uint32_t height = settings.height;
-  result.image = Image(width, height);
-  const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
+  const bool hitsKernel = options.kernel == Kernel::Hits;
+  if (hitsKernel)
+    result.hits.resize(static_cast<std::size_t>(width) * height);
+  else
+    result.image = Image(width, height);
+  const bool adaptive = !hitsKernel && settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
   // Bands never exceed the image window; rows come in whole workgroups.
   const std::uint32_t windowRows = imageRows_;
 
@@ -451,7 +459,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       auto readStart = Clock::now();
       std::vector<glm::vec4> sums(static_cast<std::size_t>(width) * rows);
       image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
-      for (std::uint32_t r = 0; r < rows; ++r) {
+      if (hitsKernel) std::copy(sums.begin(), sums.end(), result.hits.begin() + static_cast<std::ptrdiff_t>(y) * width);
+      for (std::uint32_t r = 0; r < rows && !hitsKernel; ++r) {
         for (std::uint32_t x = 0; x < width; ++x) {
           const glm::vec4& v = sums[static_cast<std::size_t>(r) * width + x];
           result.image.at(x, y + r) = v.w > 0.0f ? glm::vec3(v) / v.w : glm::vec3(0.0f);
@@ -490,11 +499,13 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   bool reused = false;
   bool center = !options.progressive && (settings.spp == 1 || adaptive);
-  samplePipeline_ = &pipelineFor(settings.precision, specializationFor(current_, settings, options, center), reused);
+  samplePipeline_ =
+      &pipelineFor(options.kernel, settings.precision, specializationFor(current_, settings, options, center), reused);
   lastPipelineMs_ = reused ? 0.0 : samplePipeline_->creationMs();
   refinePipeline_ = nullptr;
   if (adaptive) {
-    refinePipeline_ = &pipelineFor(settings.precision, specializationFor(current_, settings, options, false), reused);
+    refinePipeline_ =
+        &pipelineFor(options.kernel, settings.precision, specializationFor(current_, settings, options, false), reused);
     if (!reused) lastPipelineMs_ += refinePipeline_->creationMs();
   }
 

@@ -10,6 +10,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 
 #include <vulkan/vulkan_raii.hpp>
 
@@ -51,7 +52,13 @@ struct RenderProgress {
 // loop), storage buffers otherwise.
 enum class SceneMemory { Auto, Uniform, Storage };
 
+// Which kernel render() runs: the renderer's, or the ray queries alone (shaders/hits.comp: closest
+// hit of each pixel-centre eye ray and, with shadows, one any-hit shadow ray; no shading), which
+// `vkray bench meshes` sets against Embree.
+enum class Kernel { Shade, Hits };
+
 struct RenderOptions {
+  Kernel kernel = Kernel::Shade;
   bool specialize = true; // false: every feature compiled in (--no-specialize)
   SceneMemory sceneMemory = SceneMemory::Auto;
   bool progressive = false;    // samples from the per-pixel sequence even at 1 spp (viewer frames)
@@ -71,7 +78,10 @@ struct RenderTimings {
 };
 
 struct RenderResult {
-  Image image;
+  Image image; // Kernel::Shade
+  // Kernel::Hits: per pixel, row-major, vec4(t or -1, hit kind, primitive index, shadow: -1 none
+  // traced, 0 lit, 1 occluded).
+  std::vector<glm::vec4> hits;
   RayStats stats;
   RenderTimings timings;
   Features features;
@@ -114,7 +124,8 @@ private:
   vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
                                            bool centerSample) const;
   bool useUniformScene(const RenderOptions& o) const;
-  const vulkan::ComputePipeline& pipelineFor(Precision precision, const vulkan::Specialization& spec, bool& reused);
+  const vulkan::ComputePipeline& pipelineFor(Kernel kernel, Precision precision, const vulkan::Specialization& spec,
+                                             bool& reused);
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();
@@ -131,7 +142,7 @@ private:
   vk::raii::DescriptorPool descriptorPool_{nullptr};
   vk::raii::DescriptorSet descriptorSet_{nullptr};
   vk::raii::QueryPool queryPool_{nullptr};
-  std::map<std::pair<Precision, vulkan::Specialization>, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
+  std::map<std::tuple<Kernel, Precision, vulkan::Specialization>, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
   const vulkan::ComputePipeline* samplePipeline_ = nullptr; // pass kPassSample
   const vulkan::ComputePipeline* refinePipeline_ = nullptr; // adaptive AA's refine pass
 
