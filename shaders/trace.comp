@@ -17,6 +17,7 @@ layout(std430, binding = kBindingImage) buffer ImageBuffer { vec4 image[]; };
 layout(std430, binding = kBindingPrevImage) readonly buffer PrevImageBuffer { vec4 prevImage[]; };
 layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
+layout(constant_id = kSpecRefinePass) const bool REFINE_PASS = false;
 
 // Per-invocation counters (gShadowRays lives in shade.glsl).
 uint gEyeRays = 0u;
@@ -247,7 +248,7 @@ void main() {
   if (inside) {
     uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
     uint slot = (pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x;
-    if (opaqueUniform(pc.pass) == kPassRefine) {
+    if (REFINE_PASS) {
       // Refined pixels get spp fresh samples; the others keep their base sample. The host may
       // split the samples over several dispatches; the later ones accumulate (refined pixels only).
       bool accumulate = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u;

@@ -174,7 +174,7 @@ bool Renderer::useUniformScene(const RenderOptions& o) const {
 }
 
 vulkan::Specialization Renderer::specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
-                                                   bool centerSample) const {
+                                                   bool centerSample, bool refinePass) const {
   vulkan::Specialization spec;
   bool all = !o.specialize;
   spec.set(gpu::kSpecHasSpheres, all || f.spheres);
@@ -196,6 +196,7 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   spec.set(gpu::kSpecSmoothNormals, all || f.smoothNormals);
   spec.set(gpu::kSpecSceneInUbo, usesUniformScene_);
   spec.set(gpu::kSpecCenterSample, centerSample);
+  spec.set(gpu::kSpecRefinePass, refinePass);
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
   // pipeline keeps every count a runtime value.
   auto count = [&](std::size_t n) {
@@ -499,13 +500,13 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   bool reused = false;
   bool center = !options.progressive && (settings.spp == 1 || adaptive);
-  samplePipeline_ =
-      &pipelineFor(options.kernel, settings.precision, specializationFor(current_, settings, options, center), reused);
+  samplePipeline_ = &pipelineFor(options.kernel, settings.precision,
+                                 specializationFor(current_, settings, options, center, false), reused);
   lastPipelineMs_ = reused ? 0.0 : samplePipeline_->creationMs();
   refinePipeline_ = nullptr;
   if (adaptive) {
-    refinePipeline_ =
-        &pipelineFor(options.kernel, settings.precision, specializationFor(current_, settings, options, false), reused);
+    refinePipeline_ = &pipelineFor(options.kernel, settings.precision,
+                                   specializationFor(current_, settings, options, false, true), reused);
     if (!reused) lastPipelineMs_ += refinePipeline_->creationMs();
   }
 

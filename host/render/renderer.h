@@ -122,7 +122,7 @@ public:
 private:
   struct PipelineKey;
   vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
-                                           bool centerSample) const;
+                                           bool centerSample, bool refinePass) const;
   bool useUniformScene(const RenderOptions& o) const;
   const vulkan::ComputePipeline& pipelineFor(Kernel kernel, Precision precision, const vulkan::Specialization& spec,
                                              bool& reused);

@@ -84,7 +84,10 @@ VKRAY_CONST(uint, kSpecTriangleCount, 19u);
 VKRAY_CONST(uint, kSpecPolygonCount, 20u);
 VKRAY_CONST(uint, kSpecLightCount, 21u);
 VKRAY_CONST(uint, kSpecOccluderPlaneCount, 22u); // planes that can cast a shadow (listed first)
-VKRAY_CONST(uint, kSpecCount, 23u);
+// The adaptive refine pass's pipeline (kPassRefine): on CPU drivers a branch on the pass at run
+// time would run the other pass's whole body too, masked off (it doubled the trace).
+VKRAY_CONST(uint, kSpecRefinePass, 23u);
+VKRAY_CONST(uint, kSpecCount, 24u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -116,7 +119,7 @@ VKRAY_CONST(uint, kBvhLeafFirstMask, 0x07FFFFFFu);
 VKRAY_CONST(uint, kBvhNoRef, 0xFFFFFFFFu); // an empty tree's root
 VKRAY_CONST(uint, kPrimPlane, 3u); // never in the BVH; used to tag hits
 
-// ---- Render passes (push constant `pass`) and flags -----------------------------------------------
+// ---- Render passes (kSpecRefinePass; push constant `pass` says the same) and flags -----------------------------------------------
 // The image holds, per pixel, vec4(sum of sample radiances, sample count); the host divides.
 VKRAY_CONST(uint, kPassSample, 0u);       // sampleCount samples per pixel (sampleBase, sampleBase + 1, ...)
 VKRAY_CONST(uint, kPassRefine, 1u);       // adaptive AA: resample pixels whose neighbours differ
