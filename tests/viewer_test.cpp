@@ -456,6 +456,79 @@ TEST_F(Viewer, AMovingCameraRendersAtTheMotionScale) {
   EXPECT_EQ(readImage(dir_ / "m.pfm").width, 32u);
 }
 
+// The keys, the mouse wheel and minimizing, end to end: a window manager (twm) and xdotool drive
+// a live viewer through the X server as a user would. C prints the camera, the wheel zooms (but not
+// while the pointer is over the overlay, which H hides), R resets, F then W flies forward, P saves a
+// screenshot, minimizing pauses tracing, Esc quits; all under the validation layer.
+TEST_F(Viewer, KeysWheelAndMinimizeWorkThroughTheXServer) {
+  if (std::system("command -v xdotool >/dev/null && command -v twm >/dev/null") != 0) {
+    GTEST_SKIP() << "needs xdotool and twm (tools/install-deps installs them)";
+  }
+  // twm with nothing to draw (Xvfb has only the "fixed" font) and no interactive placement.
+  writeText(dir_ / "twmrc", "RandomPlacement\nNoTitle\nTitleFont \"fixed\"\nResizeFont \"fixed\"\n"
+                            "MenuFont \"fixed\"\nIconFont \"fixed\"\nIconManagerFont \"fixed\"\n");
+  const std::string dir = dir_.string();
+  std::string script = R"(set -u
+cd ')" + dir + R"('
+LANG=C LC_ALL=C twm -f twmrc 2>/dev/null &
+wm=$!
+trap 'kill $wm 2>/dev/null' EXIT
+sleep 0.5
+VKRAY_DEVICE=llvmpipe VKRAY_CACHE_DIR=')" +
+                       cacheDir_.string() + R"(' ')" VKRAY_BINARY R"(' view ')" + scene("seed.json") +
+                       R"(' --width 96 --height 72 --stats --validate >out 2>err &
+vk=$!
+win=$(timeout 60 xdotool search --sync --onlyvisible --name '^vkray' | head -1)
+if [ -z "$win" ]; then kill $vk; echo "no window" >&2; exit 3; fi
+xdotool windowfocus --sync "$win"
+xdotool mousemove --window "$win" 48 36
+sleep 1
+xdotool key c; sleep 0.5
+xdotool click 4 click 4 click 4; sleep 0.5
+xdotool key c; sleep 0.5
+xdotool key h; sleep 0.5
+xdotool click 4 click 4 click 4; sleep 0.5
+xdotool key c; sleep 0.5
+xdotool key r; sleep 0.5
+xdotool key c; sleep 0.5
+xdotool key f; xdotool keydown w; sleep 1; xdotool keyup w; sleep 0.5
+xdotool key c p; sleep 1
+xdotool windowminimize --sync "$win"; sleep 1.5
+xdotool windowmap --sync "$win"; sleep 0.5
+xdotool windowfocus --sync "$win"
+xdotool key Escape
+for i in $(seq 600); do kill -0 $vk 2>/dev/null || break; sleep 0.1; done
+wait $vk
+)";
+  writeText(dir_ / "drive.sh", script);
+  int status = std::system(("sh '" + (dir_ / "drive.sh").string() + "'").c_str());
+  std::string out = slurp(dir_ / "out");
+  std::string err = slurp(dir_ / "err");
+  ASSERT_TRUE(WIFEXITED(status)) << err;
+  ASSERT_EQ(WEXITSTATUS(status), 0) << "the viewer (or the script driving it) failed: " << err << out;
+  EXPECT_EQ(err, "") << "the validation layer (or something else) complained";
+
+  std::vector<std::string> cameras;
+  std::istringstream lines(out);
+  for (std::string line; std::getline(lines, line);) {
+    if (line.rfind("\"camera\":", 0) == 0) cameras.push_back(line);
+  }
+  ASSERT_EQ(cameras.size(), 5u) << out;
+  const std::string sceneCamera =
+      R"("camera": { "position": [0, 2.6, 8], "look_at": [0, 1, 0], "up": [0, 1, 0], "fov_y": 40 })";
+  EXPECT_EQ(cameras[0], sceneCamera);
+  EXPECT_EQ(cameras[1], sceneCamera) << "the wheel over the overlay must not move the camera";
+  EXPECT_NE(cameras[2], sceneCamera) << "the wheel zooms once the overlay is hidden";
+  EXPECT_NE(cameras[2].find("\"look_at\": [0, 1, 0]"), std::string::npos) << "zooming keeps the orbit target";
+  EXPECT_EQ(cameras[3], sceneCamera) << "R resets to the scene's camera";
+  EXPECT_NE(cameras[4], sceneCamera) << "F then W flies the camera forward";
+  EXPECT_EQ(slurp(dir_ / "seed-camera.json"), cameras[4]) << "C also saves the camera to a file";
+  EXPECT_TRUE(fs::exists(dir_ / "seed-001.png")) << out;
+  const std::size_t at = out.find("minimized: ");
+  ASSERT_NE(at, std::string::npos) << out;
+  EXPECT_GE(std::stod(out.substr(at + 11)), 1000.0) << "the 1.5 s minimized must be spent paused";
+}
+
 TEST_F(Viewer, NoDisplayIsAOneLineError) {
   fs::path shot = dir_ / "x.png";
   RunResult r = vkray("view '" + scene("showcase.json") + "' --frames 1 --screenshot '" + shot.string() + "'",

@@ -153,6 +153,7 @@ private:
   vk::Extent2D lastFramebuffer_{0, 0}; // the window size the swapchain was made for
   bool prepared_ = false;
   std::uint32_t tracedFrames_ = 0; // scripted: frames traced at the current render size
+  double minimizedMs_ = 0.0;       // time spent minimized, tracing nothing
   bool resizeRequested_ = false;
   Clock::time_point resizeRequestedAt_{};
   vk::Extent2D windowPixelsExtent_{0, 0};
@@ -457,6 +458,7 @@ OverlayModel FrameLoop::overlayModel() const {
 ViewerSummary FrameLoop::summarize() const {
   const FrameTimes& t = total_;
   ViewerSummary v;
+  v.minimizedMs = minimizedMs_;
   v.device = context_.info().name;
   v.presentMode = presentModeName(swapchain_.presentMode());
   v.renderWidth = presenter_.size().width;
@@ -489,7 +491,7 @@ int FrameLoop::run() {
   bool idle = false;
   while (!window_.shouldClose()) {
     const vk::Extent2D framebuffer = window_.framebufferSize();
-    const bool minimized = framebuffer.width == 0 || framebuffer.height == 0;
+    const bool minimized = window_.iconified() || framebuffer.width == 0 || framebuffer.height == 0;
     // Nothing to trace and nothing happening: sleep until an event (or a reload check is due).
     window_.pollEvents(minimized || (idle && !scripted()), 0.25);
     auto frameStart = Clock::now();
@@ -497,7 +499,10 @@ int FrameLoop::run() {
     double dt = std::chrono::duration<double>(frameStart - previous).count();
     previous = frameStart;
     InputFrame input = window_.takeInput();
-    if (minimized) continue;
+    if (minimized) { // nothing is seen: trace nothing, and wait for events
+      minimizedMs_ += dt * 1000.0;
+      continue;
+    }
 
     const vk::Extent2D fb = window_.framebufferSize();
     if (window_.takeResized() || swapchainStale_ || fb != lastFramebuffer_) recreateSwapchain(fb);
@@ -626,6 +631,7 @@ void printViewerSummary(const ViewerSummary& v) {
     std::printf("mrays/s: %.2f\n", v.mraysPerSecond);
   }
   std::printf("samples: %u\n", v.samples);
+  std::printf("minimized: %.0f ms\n", v.minimizedMs);
 }
 
 int runViewer(const ViewerOptions& o) {

@@ -33,6 +33,7 @@ struct ViewerSummary {
   double raysPerFrame = 0.0;
   double mraysPerSecond = 0.0; // rays / trace time
   std::uint32_t samples = 0;   // samples per pixel at the end
+  double minimizedMs = 0.0;    // time the window spent minimized (nothing traced)
   double fps() const { return frameMs > 0 ? 1000.0 / frameMs : 0.0; }
   double gpuMs() const { return traceMs + resolveMs + blitMs + overlayMs; }
 };

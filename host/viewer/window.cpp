@@ -87,6 +87,10 @@ bool Window::shouldClose() const {
   return glfwWindowShouldClose(window_.get()) == GLFW_TRUE;
 }
 
+bool Window::iconified() const {
+  return glfwGetWindowAttrib(window_.get(), GLFW_ICONIFIED) == GLFW_TRUE;
+}
+
 void Window::requestClose() {
   glfwSetWindowShouldClose(window_.get(), GLFW_TRUE);
 }

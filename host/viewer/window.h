@@ -52,6 +52,9 @@ public:
   // Processes pending events; with `wait`, sleeps until one arrives or timeout passes.
   void pollEvents(bool wait = false, double timeoutSeconds = 0.1);
   bool shouldClose() const;
+  // Minimized by the window manager. On X11 the drawable keeps its size then, so a zero
+  // framebuffer alone does not tell.
+  bool iconified() const;
   void requestClose();
   // The drawable size in pixels (0 x 0 while minimized).
   vk::Extent2D framebufferSize() const;
