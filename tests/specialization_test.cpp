@@ -212,5 +212,21 @@ TEST(RenderSpecialization, SceneMemoryLayoutsAgree) {
   EXPECT_EQ(render(s, storage).image.pixels, render(s, uniform).image.pixels);
 }
 
+// A scene too large for the uniform block still reads its materials, lights and planes from it
+// (on a CPU device): the same image as with everything in storage buffers.
+TEST(RenderSpecialization, ShadingFromTheUniformBlockAgreesWithStorage) {
+  Scene s = loadScene(VKRAY_SOURCE_DIR "/scenes/meshes.json");
+  s.render.width = 48;
+  s.render.height = 36;
+  RenderOptions storage;
+  storage.sceneMemory = SceneMemory::Storage;
+  RenderOptions automatic;
+  RenderResult a = render(s, storage);
+  RenderResult b = render(s, automatic);
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
+  EXPECT_GT(a.stats.shadow, 0u);
+  EXPECT_GT(a.stats.reflection, 0u);
+}
+
 } // namespace
 } // namespace vkray::test

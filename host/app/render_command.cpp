@@ -122,7 +122,10 @@ int runRender(const RenderArgs& args) {
     std::printf("spp: %d\n", scene.render.spp);
     std::printf("max depth: %d\n", scene.render.maxDepth);
     for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
-    std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers" : "storage buffers");
+    std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers"
+                                      : renderer.usesUniformShading()
+                                          ? "materials, lights, planes uniform; primitives in storage and texel buffers"
+                                          : "storage and texel buffers");
     printStat("load", loadMs);
     for (const MeshInfo& m : scene.meshes) {
       std::printf("mesh %s: %zu triangles, %zu degenerate dropped\n", m.file.c_str(), m.triangleCount,

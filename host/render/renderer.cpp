@@ -136,18 +136,20 @@ void Renderer::setScene(const Scene& scene) {
                "BVH nodes");
   uploadTexels(sceneBuffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, vk::Format::eR32Uint,
                "BVH primitive references");
-  sceneFitsUbo_ = g.materials.size() <= gpu::kUboMaterials && g.lights.size() <= gpu::kUboLights &&
-                  g.spheres.size() <= gpu::kUboSpheres && g.planes.size() <= gpu::kUboPlanes &&
-                  g.triangles.size() <= gpu::kUboTriangles && g.polygons.size() <= gpu::kUboPolygons &&
-                  g.polyVertices.size() <= gpu::kUboPolyVertices;
-  // The uniform copy always exists at full size (the shader declares fixed arrays); it is filled
-  // only when the scene fits.
+  shadingFitsUbo_ = g.materials.size() <= gpu::kUboMaterials && g.lights.size() <= gpu::kUboLights &&
+                    g.planes.size() <= gpu::kUboPlanes;
+  sceneFitsUbo_ = shadingFitsUbo_ && g.spheres.size() <= gpu::kUboSpheres && g.triangles.size() <= gpu::kUboTriangles &&
+                  g.polygons.size() <= gpu::kUboPolygons && g.polyVertices.size() <= gpu::kUboPolyVertices;
+  // The uniform copy always exists at full size (the shader declares fixed arrays); the materials,
+  // lights and planes are filled in when they fit, the primitives when the whole scene does.
   auto packed = std::make_unique<gpu::SceneUbo>();
-  if (sceneFitsUbo_) {
+  if (shadingFitsUbo_) {
     packUniform(packed->materials, g.materials);
     packUniform(packed->lights, g.lights);
-    packUniform(packed->spheres, g.spheres);
     packUniform(packed->planes, g.planes);
+  }
+  if (sceneFitsUbo_) {
+    packUniform(packed->spheres, g.spheres);
     packUniform(packed->triangles, g.triangles);
     packUniform(packed->polygons, g.polygons);
     packUniform(packed->polyVertices, g.polyVertices);
@@ -173,6 +175,11 @@ bool Renderer::useUniformScene(const RenderOptions& o) const {
   return sceneFitsUbo_ && context_.info().type == "CPU";
 }
 
+bool Renderer::useUniformShading(const RenderOptions& o) const {
+  if (useUniformScene(o)) return true;
+  return o.sceneMemory == SceneMemory::Auto && shadingFitsUbo_ && context_.info().type == "CPU";
+}
+
 vulkan::Specialization Renderer::specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
                                                    bool centerSample, bool refinePass) const {
   vulkan::Specialization spec;
@@ -195,6 +202,7 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   spec.set(gpu::kSpecChecker, all || f.checker);
   spec.set(gpu::kSpecSmoothNormals, all || f.smoothNormals);
   spec.set(gpu::kSpecSceneInUbo, usesUniformScene_);
+  spec.set(gpu::kSpecShadingInUbo, usesUniformShading_);
   spec.set(gpu::kSpecCenterSample, centerSample);
   spec.set(gpu::kSpecRefinePass, refinePass);
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
@@ -496,6 +504,7 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   // The BVH exists only if setScene built it; without it the kernel loops over all primitives.
   current_.useBvh = current_.useBvh && !gpuScene_.bvh.nodes.empty();
   usesUniformScene_ = useUniformScene(options);
+  usesUniformShading_ = useUniformShading(options);
   const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
   // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   bool reused = false;

@@ -117,6 +117,7 @@ public:
   RayStats takeStats();           // reads and zeroes the counters
   const Features& currentFeatures() const { return current_; }
   bool usesUniformScene() const { return usesUniformScene_; }
+  bool usesUniformShading() const { return usesUniformShading_; }
   double lastPipelineMs() const { return lastPipelineMs_; }
 
 private:
@@ -124,6 +125,9 @@ private:
   vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
                                            bool centerSample, bool refinePass) const;
   bool useUniformScene(const RenderOptions& o) const;
+  // Materials, lights and planes from the uniform block: with the whole scene, or on their own in a
+  // scene too large for it (on CPU devices, where a uniform read is a gather).
+  bool useUniformShading(const RenderOptions& o) const;
   const vulkan::ComputePipeline& pipelineFor(Kernel kernel, Precision precision, const vulkan::Specialization& spec,
                                              bool& reused);
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
@@ -152,6 +156,7 @@ private:
   std::unique_ptr<vulkan::Buffer> frameBuffer_;
   std::vector<std::unique_ptr<vulkan::Buffer>> sceneBuffers_; // indexed by binding (SSBO and UBO copies)
   bool sceneFitsUbo_ = false;
+  bool shadingFitsUbo_ = false;               // materials, lights and planes (a mesh scene's primitives do not fit)
   std::unique_ptr<vulkan::Buffer> image_;     // window of imageRows_ rows
   std::unique_ptr<vulkan::Buffer> prevImage_; // refine pass input (or a 16-byte placeholder)
   std::unique_ptr<vulkan::Buffer> stats_;
@@ -163,6 +168,7 @@ private:
   double lastPipelineMs_ = 0.0;
   bool timestamps_ = false;
   bool usesUniformScene_ = false;
+  bool usesUniformShading_ = false;
 };
 
 } // namespace vkray

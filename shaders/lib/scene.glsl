@@ -23,6 +23,7 @@ layout(constant_id = kSpecShadowMode) const uint SHADOW_MODE = kShadowsAttenuate
 layout(constant_id = kSpecChecker) const bool CHECKER = true;
 layout(constant_id = kSpecSmoothNormals) const bool SMOOTH_NORMALS = true;
 layout(constant_id = kSpecSceneInUbo) const bool SCENE_IN_UBO = false;
+layout(constant_id = kSpecShadingInUbo) const bool SHADING_IN_UBO = false;
 layout(constant_id = kSpecCenterSample) const bool CENTER_SAMPLE = false;
 layout(constant_id = kSpecSphereCount) const uint SPHERE_COUNT = kRuntimeCount;
 layout(constant_id = kSpecPlaneCount) const uint PLANE_COUNT = kRuntimeCount;
@@ -65,11 +66,11 @@ uint lightCount() { return LIGHT_COUNT != kRuntimeCount ? LIGHT_COUNT : opaqueUn
 // Scene array access. SCENE_IN_UBO is a specialization constant, so only one of each pair of loads
 // survives compilation.
 Material loadMaterial(uint i) {
-  if (SCENE_IN_UBO) return small.materials[i];
+  if (SCENE_IN_UBO || SHADING_IN_UBO) return small.materials[i];
   return materials[i];
 }
 Light loadLight(uint i) {
-  if (SCENE_IN_UBO) return small.lights[i];
+  if (SCENE_IN_UBO || SHADING_IN_UBO) return small.lights[i];
   return lights[i];
 }
 Sphere loadSphere(uint i) {
@@ -77,7 +78,7 @@ Sphere loadSphere(uint i) {
   return spheres[i];
 }
 Plane loadPlane(uint i) {
-  if (SCENE_IN_UBO) return small.planes[i];
+  if (SCENE_IN_UBO || SHADING_IN_UBO) return small.planes[i];
   return planes[i];
 }
 Triangle loadTriangle(uint i) {

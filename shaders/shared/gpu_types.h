@@ -87,7 +87,9 @@ VKRAY_CONST(uint, kSpecOccluderPlaneCount, 22u); // planes that can cast a shado
 // The adaptive refine pass's pipeline (kPassRefine): on CPU drivers a branch on the pass at run
 // time would run the other pass's whole body too, masked off (it doubled the trace).
 VKRAY_CONST(uint, kSpecRefinePass, 23u);
-VKRAY_CONST(uint, kSpecCount, 24u);
+// Materials, lights and planes read from the uniform block even when the primitives are not.
+VKRAY_CONST(uint, kSpecShadingInUbo, 24u);
+VKRAY_CONST(uint, kSpecCount, 25u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
