@@ -90,6 +90,39 @@ CoverageError coverageError(const Scene& s, const Image& img, double bottomX, do
   return e;
 }
 
+// shaders/lib/sampling.glsl computes the second Sobol dimension without a loop, as a superset-sum
+// transform of the index's bits (see there). The identity it relies on, on the host: it equals the
+// direction-number recurrence for the first 2^20 indices and for a million random ones.
+TEST(RenderAntialiasing, SobolClosedFormEqualsDirectionNumbers) {
+  auto loop = [](std::uint32_t index) {
+    std::uint32_t d = 0, v = 0x80000000u;
+    for (std::uint32_t i = index; i != 0; i >>= 1) {
+      if (i & 1u) d ^= v;
+      v ^= v >> 1;
+    }
+    return d;
+  };
+  auto reverse = [](std::uint32_t x) {
+    std::uint32_t r = 0;
+    for (int b = 0; b < 32; ++b) r |= ((x >> b) & 1u) << (31 - b);
+    return r;
+  };
+  auto closed = [&](std::uint32_t w) {
+    w ^= (w >> 1) & 0x55555555u;
+    w ^= (w >> 2) & 0x33333333u;
+    w ^= (w >> 4) & 0x0F0F0F0Fu;
+    w ^= (w >> 8) & 0x00FF00FFu;
+    w ^= (w >> 16) & 0x0000FFFFu;
+    return reverse(w);
+  };
+  std::uint32_t state = 12345u;
+  for (std::uint32_t i = 0; i < (1u << 20); ++i) {
+    ASSERT_EQ(closed(i), loop(i)) << i;
+    state = state * 1664525u + 1013904223u;
+    ASSERT_EQ(closed(state), loop(state)) << state;
+  }
+}
+
 // 16 samples of an Owen-scrambled Sobol (0,4,2)-net put exactly one sample in each 1/16-wide
 // vertical strip of the pixel, so a vertical edge is off by less than one sample: < 1/16, always.
 TEST(RenderAntialiasing, AxisAlignedEdgeWithinOneSixteenth) {

@@ -7,22 +7,22 @@
 
 #include "common.glsl"
 
-// First two Sobol dimensions as 0.32 fixed point: dimension 0 is the van der Corput sequence,
-// dimension 1 has direction numbers v_i = v_(i-1) ^ (v_(i-1) >> 1).
+// First two Sobol dimensions as 0.32 fixed point, without a loop over the index's bits (on a CPU
+// driver such a loop runs 32 times for a scrambled index, in every lane). Dimension 0 is the van der
+// Corput sequence: the index's bits reversed. Dimension 1 has direction numbers
+// v_k = v_(k-1) ^ (v_(k-1) >> 1) from v_0 = 2^31, i.e. bit 31 - j of v_k is C(k, j) mod 2, which by
+// Lucas' theorem is 1 exactly when j's bits are a subset of k's. So bit 31 - j of the result is the
+// XOR of the index's bits k over the supersets k of j: a superset-sum transform over the 5 bit
+// positions of j, one shift-and-mask step each, then the bits reversed. (Equal to the direction-
+// number loop for every index: tests/antialiasing_test.cpp, SobolClosedFormEqualsDirectionNumbers.)
 uvec2 sobol2(uint index) {
-  uint d0 = 0u;
-  uint d1 = 0u;
-  uint v1 = 0x80000000u;
-  uint v0 = 0x80000000u;
-  for (uint i = index; i != 0u; i >>= 1u) {
-    if ((i & 1u) != 0u) {
-      d0 ^= v0;
-      d1 ^= v1;
-    }
-    v0 >>= 1u;
-    v1 ^= v1 >> 1u;
-  }
-  return uvec2(d0, d1);
+  uint w = index;
+  w ^= (w >> 1u) & 0x55555555u;
+  w ^= (w >> 2u) & 0x33333333u;
+  w ^= (w >> 4u) & 0x0F0F0F0Fu;
+  w ^= (w >> 8u) & 0x00FF00FFu;
+  w ^= (w >> 16u) & 0x0000FFFFu;
+  return uvec2(bitfieldReverse(index), bitfieldReverse(w));
 }
 
 // Nested uniform (Owen) scrambling of a 32-bit fixed-point value, applied to its bit-reversed form so
