@@ -121,7 +121,7 @@ VKRAY_CONST(uint, kBvhLeafFirstMask, 0x07FFFFFFu);
 VKRAY_CONST(uint, kBvhNoRef, 0xFFFFFFFFu); // an empty tree's root
 VKRAY_CONST(uint, kPrimPlane, 3u); // never in the BVH; used to tag hits
 
-// ---- Render passes (kSpecRefinePass; push constant `pass` says the same) and flags -----------------------------------------------
+// ---- Render passes (kSpecRefinePass; the push constant `pass` says the same) and flags ----------
 // The image holds, per pixel, vec4(sum of sample radiances, sample count); the host divides.
 VKRAY_CONST(uint, kPassSample, 0u);       // sampleCount samples per pixel (sampleBase, sampleBase + 1, ...)
 VKRAY_CONST(uint, kPassRefine, 1u);       // adaptive AA: resample pixels whose neighbours differ
@@ -209,7 +209,8 @@ struct FrameParams {
   vec4 knobs;         // x: bailout weight; y: adaptive AA threshold; zw: unused
   uvec4 imageSize;    // x: width; y: height; z: unused; w: max depth (bounces after the eye ray)
   uvec4 counts;       // x: spheres; y: planes; z: triangles; w: polygons
-  uvec4 counts2;      // x: lights; y: BVH nodes; z: planes that can cast shadows (first in Planes[]); w: BVH root reference
+  uvec4 counts2;      // x: lights; y: BVH nodes; z: planes that can cast shadows (first in Planes[]);
+                      // w: the BVH root's reference (BvhWideNode)
 };
 
 struct RayStats {
