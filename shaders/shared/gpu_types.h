@@ -31,12 +31,12 @@ VKRAY_CONST(uint, kBindingMaterials, 1u);    // Material[]
 VKRAY_CONST(uint, kBindingLights, 2u);       // Light[]
 VKRAY_CONST(uint, kBindingSpheres, 3u);      // Sphere[]
 VKRAY_CONST(uint, kBindingPlanes, 4u);       // Plane[]
-VKRAY_CONST(uint, kBindingTriangles, 5u);    // Triangle[]
+VKRAY_CONST(uint, kBindingTriangles, 5u);    // texels: Triangle[] (3 RGBA32F each)
 VKRAY_CONST(uint, kBindingPolygons, 6u);     // Polygon[]
 VKRAY_CONST(uint, kBindingPolyVertices, 7u); // vec4[] polygon vertices (xyz)
-VKRAY_CONST(uint, kBindingNormals, 8u);      // vec4[] shading normals, 3 per smooth triangle
-VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // BvhNode[]
-VKRAY_CONST(uint, kBindingPrimRefs, 10u);    // uint[] BVH leaf references (kind << 30 | index)
+VKRAY_CONST(uint, kBindingNormals, 8u);      // texels: shading normals, 3 per smooth triangle
+VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // texels: BvhWideNode[] (4 RGBA32F each)
+VKRAY_CONST(uint, kBindingPrimRefs, 10u);    // texels (R32UI): leaf references, kind << 30 | index
 VKRAY_CONST(uint, kBindingImage, 11u);       // vec4[] linear RGB, row-major, width * height
 VKRAY_CONST(uint, kBindingStats, 12u);       // RayStats
 VKRAY_CONST(uint, kBindingPrevImage, 13u);   // vec4[] copy of the image read by the refine pass
@@ -163,8 +163,9 @@ struct Polygon {
   uvec4 meta; // x: first vertex in PolyVertices[]; y: vertex count; z: material; w: unused
 };
 
-// Flattened BVH node (pbrt's LinearBVHNode layout): depth first, the first child follows its
-// parent, so an interior node stores only the index of its second child.
+// Flattened BVH node (pbrt's LinearBVHNode layout), the host's form of the tree: depth first, the
+// first child follows its parent, so an interior node stores only the index of its second child.
+// The shader reads the BvhWideNode records made from it (host/accel/bvh.h, wideBvh).
 struct BvhNode {
   vec3 boundsMin;
   uint offset; // leaf: first PrimRef; interior: index of the second child
