@@ -119,7 +119,7 @@ VKRAY_CONST(uint, kBvhLeafFlag, 0x80000000u);
 VKRAY_CONST(uint, kBvhLeafCountShift, 27u); // 4 bits: leaves of 1 to 16 entries
 VKRAY_CONST(uint, kBvhLeafFirstMask, 0x07FFFFFFu);
 VKRAY_CONST(uint, kBvhNoRef, 0xFFFFFFFFu); // an empty tree's root
-VKRAY_CONST(uint, kPrimPlane, 3u); // never in the BVH; used to tag hits
+VKRAY_CONST(uint, kPrimPlane, 3u);         // never in the BVH; used to tag hits
 
 // ---- Render passes (kSpecRefinePass; the push constant `pass` says the same) and flags ----------
 // The image holds, per pixel, vec4(sum of sample radiances, sample count); the host divides.
