@@ -26,10 +26,7 @@ void main() {
   uvec2 pixel = pc.tileOrigin + local;
   if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize.xy))) return;
 
-  vec2 size = vec2(frame.imageSize.xy);
-  vec2 at = vec2(pixel) + 0.5;
-  vec3 dir = normalize(frame.cameraForward.xyz + (2.0 * at.x / size.x - 1.0) * frame.cameraRight.xyz +
-                       (1.0 - 2.0 * at.y / size.y) * frame.cameraUp.xyz);
+  vec3 dir = eyeRayDir(vec2(pixel) + 0.5);
   TraceRay r = makeTraceRay(frame.cameraOrigin.xyz, dir);
   Hit h = traceScene(r, kInfinity, false, false);
   vec4 result = vec4(-1.0, float(h.kind), float(h.index), -1.0);

@@ -166,14 +166,6 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   return radiance;
 }
 
-// Eye ray through a point of the image plane given in pixels (x right, y down, (0,0) top-left).
-vec3 eyeRayDir(vec2 pixelPos) {
-  vec2 size = vec2(frame.imageSize.xy);
-  float x = 2.0 * pixelPos.x / size.x - 1.0;
-  float y = 1.0 - 2.0 * pixelPos.y / size.y;
-  return normalize(frame.cameraForward.xyz + x * frame.cameraRight.xyz + y * frame.cameraUp.xyz);
-}
-
 vec3 traceSample(uvec2 pixel, vec2 offset) {
   vec3 radiance = traceRadiance(frame.cameraOrigin.xyz, eyeRayDir(vec2(pixel) + offset));
   if (!isFiniteVec(radiance)) {

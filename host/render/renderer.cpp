@@ -303,8 +303,7 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.imageSize = glm::uvec4(s.width, s.height, 0u, static_cast<std::uint32_t>(f.reflection ? f.usableDepth : 0));
   p.counts = glm::uvec4(gpuScene_.spheres.size(), gpuScene_.planes.size(), gpuScene_.triangles.size(),
                         gpuScene_.polygons.size());
-  p.counts2 =
-      glm::uvec4(gpuScene_.lights.size(), gpuScene_.bvh.nodes.size(), gpuScene_.occluderPlanes, gpuScene_.bvhRoot);
+  p.counts2 = glm::uvec4(gpuScene_.lights.size(), 0u, gpuScene_.occluderPlanes, gpuScene_.bvhRoot);
   frameBuffer_->write(&p, sizeof p);
   frameWidth_ = s.width;
   frameHeight_ = s.height;

@@ -145,6 +145,14 @@ TraceRay makeTraceRay(vec3 origin, vec3 dir) {
   return r;
 }
 
+// Eye ray through a point of the image plane given in pixels (x right, y down, (0,0) top-left).
+vec3 eyeRayDir(vec2 pixelPos) {
+  vec2 size = vec2(frame.imageSize.xy);
+  float x = 2.0 * pixelPos.x / size.x - 1.0;
+  float y = 1.0 - 2.0 * pixelPos.y / size.y;
+  return normalize(frame.cameraForward.xyz + x * frame.cameraRight.xyz + y * frame.cameraUp.xyz);
+}
+
 float sphereT(TraceRay r, uint i, float tMax) {
   vec4 s = loadSphere(i).centerRadius;
 #ifdef VKRAY_FLOAT64
@@ -298,7 +306,7 @@ Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay) {
     }
   }
   if (USE_BVH) {
-    if (opaqueUniform(frame.counts2.y) > 0u) traverseBvh(r, hit, anyHit);
+    traverseBvh(r, hit, anyHit);
   } else {
     if (HAS_SPHERES) {
       for (uint i = 0u; i < sphereCount(); ++i) {

@@ -210,7 +210,7 @@ struct FrameParams {
   vec4 knobs;         // x: bailout weight; y: adaptive AA threshold; zw: unused
   uvec4 imageSize;    // x: width; y: height; z: unused; w: max depth (bounces after the eye ray)
   uvec4 counts;       // x: spheres; y: planes; z: triangles; w: polygons
-  uvec4 counts2;      // x: lights; y: BVH nodes; z: planes that can cast shadows (first in Planes[]);
+  uvec4 counts2;      // x: lights; y: unused; z: planes that can cast shadows (first in Planes[]);
                       // w: the BVH root's reference (BvhWideNode)
 };
 
