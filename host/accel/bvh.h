@@ -66,8 +66,6 @@ struct Bvh {
   std::vector<gpu::BvhNode> nodes;     // nodes[0] is the root; empty when there are no primitives
   std::vector<std::uint32_t> primRefs; // leaf ranges index this
   BvhStats stats;
-
-  std::size_t bytes() const { return nodes.size() * sizeof(gpu::BvhNode) + primRefs.size() * sizeof(std::uint32_t); }
 };
 
 // Builds the tree. Every primitive ends up in exactly one leaf; leaves hold at most

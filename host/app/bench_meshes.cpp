@@ -132,7 +132,6 @@ struct Row {
   double embreePrimaryMs = 0.0;
   double embreeShadowMs = 0.0;
   std::uint64_t embreeShadowRays = 0;
-  std::uint64_t embreeHits = 0;
 
   double primaryMrays() const { return primaryMs > 0 ? eyeRays / (primaryMs * 1e3) : 0.0; }
   double shadowMrays() const { return shadowMs > 0 ? shadowRays / (shadowMs * 1e3) : 0.0; }
@@ -224,7 +223,6 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
   std::vector<double> primaryTimes;
   std::vector<double> shadowTimes;
   std::atomic<std::uint64_t> shadowRays{0};
-  std::atomic<std::uint64_t> hits{0};
   std::atomic<std::uint64_t> occluded{0};
   std::vector<signed char> shadowed(hitT.size(), -1); // -1 no shadow ray, 0 lit, 1 occluded
   for (int run = 0; run < std::max(1, args.runs); ++run) {
@@ -249,17 +247,14 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
     });
     primaryTimes.push_back(msSince(t0));
     shadowRays = 0;
-    hits = 0;
     occluded = 0;
     t0 = Clock::now();
     parallelRows([&](RTCIntersectContext& context, std::uint32_t y) {
       std::uint64_t localRays = 0;
-      std::uint64_t localHits = 0;
       std::uint64_t localOccluded = 0;
       for (std::uint32_t x = 0; x < w; ++x) {
         std::size_t i = static_cast<std::size_t>(y) * w + x;
         if (hitT[i] < 0.0f) continue;
-        ++localHits;
         glm::vec3 p = hitT[i] * dirs[i];
         glm::vec3 n = glm::normalize(hitN[i]);
         if (glm::dot(n, dirs[i]) > 0.0f) n = -n;
@@ -282,7 +277,6 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
         localOccluded += shadowed[i];
       }
       shadowRays += localRays;
-      hits += localHits;
       occluded += localOccluded;
     });
     shadowTimes.push_back(msSince(t0));
@@ -290,7 +284,6 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
   row.embreePrimaryMs = median(primaryTimes);
   row.embreeShadowMs = median(shadowTimes);
   row.embreeShadowRays = shadowRays.load();
-  row.embreeHits = hits.load();
   row.embreeOccluded = occluded.load();
   for (std::size_t i = 0; i < hitT.size() && i < vkHits.size(); ++i) {
     int vkShadow = vkHits[i].w < 0.0f ? -1 : vkHits[i].w > 0.0f ? 1 : 0;
@@ -344,12 +337,10 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
       build = std::min(build, g.bvh.stats.buildMs);
       row.nodes = g.bvh.stats.nodes;
       row.depth = g.bvh.stats.depth;
-      // What the kernel reads: triangles, shading normals, the two-box records and the references.
-      row.bytesPerTriangle =
-          static_cast<double>(g.triangles.size() * sizeof(gpu::Triangle) + g.normals.size() * sizeof(glm::vec4) +
-                              g.bvhNodes.size() * sizeof(gpu::BvhWideNode) +
-                              g.bvh.primRefs.size() * sizeof(std::uint32_t)) /
-          static_cast<double>(row.triangles);
+      // What the kernel reads: triangles, shading normals and the BVH.
+      row.bytesPerTriangle = static_cast<double>(g.triangles.size() * sizeof(gpu::Triangle) +
+                                                 g.normals.size() * sizeof(glm::vec4) + g.bvhBytes()) /
+                             static_cast<double>(row.triangles);
       if (pass == 0) {
         // The renderer's own kernel on the eye rays: one counted render (builds the pipeline), one
         // warm-up, then the timed runs.

@@ -137,9 +137,7 @@ int runRender(const RenderArgs& args) {
       std::printf("bvh nodes: %zu\n", b.nodes);
       std::printf("bvh depth: %d\n", b.depth);
       std::size_t tris = renderer.gpuScene().triangles.size();
-      // What the shader reads: the two-box records (one per interior node) and the leaf references.
-      std::size_t bvhBytes = renderer.gpuScene().bvhNodes.size() * sizeof(gpu::BvhWideNode) +
-                             renderer.gpuScene().bvh.primRefs.size() * sizeof(std::uint32_t);
+      std::size_t bvhBytes = renderer.gpuScene().bvhBytes();
       std::printf("bvh bytes: %zu\n", bvhBytes);
       if (tris > 0)
         std::printf("bytes per triangle: %.1f\n", static_cast<double>(bvhBytes + tris * sizeof(gpu::Triangle)) / tris);

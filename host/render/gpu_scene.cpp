@@ -92,12 +92,15 @@ void orderByLeaves(GpuScene& g) {
   g.normals = std::move(normals);
 }
 
+std::size_t GpuScene::bvhBytes() const {
+  return bvhNodes.size() * sizeof(gpu::BvhWideNode) + bvh.primRefs.size() * sizeof(std::uint32_t);
+}
+
 std::size_t GpuScene::bytes() const {
   return materials.size() * sizeof(gpu::Material) + lights.size() * sizeof(gpu::Light) +
          spheres.size() * sizeof(gpu::Sphere) + planes.size() * sizeof(gpu::Plane) +
          triangles.size() * sizeof(gpu::Triangle) + polygons.size() * sizeof(gpu::Polygon) +
-         (polyVertices.size() + normals.size()) * sizeof(glm::vec4) + bvhNodes.size() * sizeof(gpu::BvhWideNode) +
-         bvh.primRefs.size() * sizeof(std::uint32_t);
+         (polyVertices.size() + normals.size()) * sizeof(glm::vec4) + bvhBytes();
 }
 
 GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, const BvhOptions& bvhOptions) {

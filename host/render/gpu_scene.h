@@ -33,6 +33,7 @@ struct GpuScene {
   std::uint32_t bvhRoot = gpu::kBvhNoRef;
 
   std::size_t bytes() const;
+  std::size_t bvhBytes() const; // what the kernel reads of the BVH: the records and the references
 };
 
 // Packs the scene relative to `origin`; builds the BVH when withBvh. With a BVH, the primitive
