@@ -465,13 +465,18 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       rowsPerMs = static_cast<double>(rows) / std::max(bandGpuMs, 1e-3);
 
       auto readStart = Clock::now();
-      std::vector<glm::vec4> sums(static_cast<std::size_t>(width) * rows);
-      image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
-      if (hitsKernel) std::copy(sums.begin(), sums.end(), result.hits.begin() + static_cast<std::ptrdiff_t>(y) * width);
-      for (std::uint32_t r = 0; r < rows && !hitsKernel; ++r) {
-        for (std::uint32_t x = 0; x < width; ++x) {
-          const glm::vec4& v = sums[static_cast<std::size_t>(r) * width + x];
-          result.image.at(x, y + r) = v.w > 0.0f ? glm::vec3(v) / v.w : glm::vec3(0.0f);
+      const std::size_t bandTexels = static_cast<std::size_t>(width) * rows;
+      if (hitsKernel) {
+        // The hit records are the result as they stand.
+        image_->read(result.hits.data() + static_cast<std::size_t>(y) * width, bandTexels * sizeof(glm::vec4));
+      } else {
+        std::vector<glm::vec4> sums(bandTexels);
+        image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
+        for (std::uint32_t r = 0; r < rows; ++r) {
+          for (std::uint32_t x = 0; x < width; ++x) {
+            const glm::vec4& v = sums[static_cast<std::size_t>(r) * width + x];
+            result.image.at(x, y + r) = v.w > 0.0f ? glm::vec3(v) / v.w : glm::vec3(0.0f);
+          }
         }
       }
       result.timings.readbackMs += msSince(readStart);
