@@ -231,13 +231,34 @@ void leafPrimitive(uint entry, out uint kind, out uint index) {
 // distance is widened by 1 + 2 gamma(3) so rounding in the slab arithmetic never culls a box the ray
 // truly touches (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013): without it a ray along a shared
 // mesh edge can miss both triangles' boxes.
+// min and max as compare-and-select. NIR's fmin/fmax must return the other operand of a NaN, which
+// llvmpipe spells as min + unordered compare + blend; the slab distances are never NaN (invDir is
+// finite, see makeTraceRay), and `precise` keeps NIR from turning the selects back into fmin/fmax,
+// so LLVM emits one minps/maxps for each.
+vec3 slabMin(vec3 a, vec3 b) {
+  precise bvec3 lt = lessThan(a, b);
+  return mix(b, a, lt);
+}
+vec3 slabMax(vec3 a, vec3 b) {
+  precise bvec3 gt = greaterThan(a, b);
+  return mix(b, a, gt);
+}
+float slabMin(float a, float b) {
+  precise bool lt = a < b;
+  return lt ? a : b;
+}
+float slabMax(float a, float b) {
+  precise bool gt = a > b;
+  return gt ? a : b;
+}
+
 float boxEntry(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
   vec3 t0 = (bmin - r.ray.origin) * r.invDir;
   vec3 t1 = (bmax - r.ray.origin) * r.invDir;
-  vec3 tNear = min(t0, t1);
-  vec3 tFar = max(t0, t1);
-  float enter = max(max(tNear.x, tNear.y), max(tNear.z, 0.0));
-  float leave = min(min(tFar.x, tFar.y), min(tFar.z, tMax)) * 1.0000003576;
+  vec3 tNear = slabMin(t0, t1);
+  vec3 tFar = slabMax(t0, t1);
+  float enter = slabMax(slabMax(tNear.x, tNear.y), slabMax(tNear.z, 0.0));
+  float leave = slabMin(slabMin(tFar.x, tFar.y), slabMin(tFar.z, tMax)) * 1.0000003576;
   return enter <= leave ? enter : uintBitsToFloat(0x7F800000u);
 }
 
