@@ -227,10 +227,6 @@ void leafPrimitive(uint entry, out uint kind, out uint index) {
 
 // ---- Traversal: every invocation walks the tree on its own ----------------------------------------
 
-// Entry distance of the ray into a box, +inf when it misses it or enters beyond tMax. The far
-// distance is widened by 1 + 2 gamma(3) so rounding in the slab arithmetic never culls a box the ray
-// truly touches (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013): without it a ray along a shared
-// mesh edge can miss both triangles' boxes.
 // min and max as compare-and-select. NIR's fmin/fmax must return the other operand of a NaN, which
 // llvmpipe spells as min + unordered compare + blend; the slab distances are never NaN (invDir is
 // finite, see makeTraceRay), and `precise` keeps NIR from turning the selects back into fmin/fmax,
@@ -252,6 +248,10 @@ float slabMax(float a, float b) {
   return gt ? a : b;
 }
 
+// Entry distance of the ray into a box, +inf when it misses it or enters beyond tMax. The far
+// distance is widened by 1 + 2 gamma(3) so rounding in the slab arithmetic never culls a box the ray
+// truly touches (Ize, "Robust BVH Ray Traversal", JCGT 2(2), 2013): without it a ray along a shared
+// mesh edge can miss both triangles' boxes.
 float boxEntry(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
   vec3 t0 = (bmin - r.ray.origin) * r.invDir;
   vec3 t1 = (bmax - r.ray.origin) * r.invDir;
