@@ -126,14 +126,13 @@ void Renderer::setScene(const Scene& scene) {
   uploadArray(sceneBuffers_[gpu::kBindingLights], context_, g.lights, "lights");
   uploadArray(sceneBuffers_[gpu::kBindingSpheres], context_, g.spheres, "spheres");
   uploadArray(sceneBuffers_[gpu::kBindingPlanes], context_, g.planes, "planes");
-  uploadTexels(sceneBuffers_[gpu::kBindingTriangles], context_, g.triangles, vk::Format::eR32G32B32A32Sfloat,
+  uploadTexels(sceneBuffers_[gpu::kBindingTriangles], context_, g.triangles, vk::Format::eR32G32B32A32Uint,
                "triangles");
   uploadArray(sceneBuffers_[gpu::kBindingPolygons], context_, g.polygons, "polygons");
   uploadArray(sceneBuffers_[gpu::kBindingPolyVertices], context_, g.polyVertices, "polygon vertices");
   uploadTexels(sceneBuffers_[gpu::kBindingNormals], context_, g.normals, vk::Format::eR32G32B32A32Sfloat,
                "shading normals");
-  uploadTexels(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvhNodes, vk::Format::eR32G32B32A32Sfloat,
-               "BVH nodes");
+  uploadTexels(sceneBuffers_[gpu::kBindingBvhNodes], context_, g.bvhNodes, vk::Format::eR32G32B32A32Uint, "BVH nodes");
   uploadTexels(sceneBuffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, vk::Format::eR32Uint,
                "BVH primitive references");
   shadingFitsUbo_ = g.materials.size() <= gpu::kUboMaterials && g.lights.size() <= gpu::kUboLights &&

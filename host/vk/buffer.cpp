@@ -75,6 +75,7 @@ namespace {
 std::uint32_t texelBytes(vk::Format format) {
   switch (format) {
   case vk::Format::eR32G32B32A32Sfloat:
+  case vk::Format::eR32G32B32A32Uint:
     return 16;
   case vk::Format::eR32Uint:
     return 4;

@@ -45,10 +45,13 @@ layout(std430, binding = kBindingPolyVertices) readonly buffer PolyVertices { ve
 // The mesh-sized arrays are texel buffers: a texel fetch at per-invocation addresses is one vector
 // gather on lavapipe, where a storage-buffer read is a per-lane loop of scalar loads (2-3x slower
 // traversal, docs/performance.md "Meshes"); and a texel buffer may hold maxTexelBufferElements
-// texels (2 GiB of RGBA32F on lavapipe) where a storage buffer is capped at maxStorageBufferRange.
-layout(binding = kBindingTriangles) uniform samplerBuffer triangleTexels;   // 3 per Triangle
+// texels (2 GiB of 16-byte texels on lavapipe) where a storage buffer is capped at maxStorageBufferRange.
+// Triangles and BVH records are read as integers (RGBA32UI) and their coordinates reinterpreted: the
+// fourth words are ids and indices, and small ones read through a float format would be denormals,
+// which Vulkan lets a device flush to zero on the way into a shader.
+layout(binding = kBindingTriangles) uniform usamplerBuffer triangleTexels;  // 3 per Triangle
 layout(binding = kBindingNormals) uniform samplerBuffer normalTexels;       // 1 per vertex normal
-layout(binding = kBindingBvhNodes) uniform samplerBuffer nodeTexels;        // 4 per BvhWideNode
+layout(binding = kBindingBvhNodes) uniform usamplerBuffer nodeTexels;       // 4 per BvhWideNode
 layout(binding = kBindingPrimRefs) uniform usamplerBuffer primRefTexels;    // 1 per reference
 
 layout(std140, binding = kBindingSceneUbo) uniform SceneBlock { SceneUbo small; };
@@ -84,8 +87,8 @@ Plane loadPlane(uint i) {
 Triangle loadTriangle(uint i) {
   if (SCENE_IN_UBO) return small.triangles[i];
   int t = int(3u * i);
-  return Triangle(texelFetch(triangleTexels, t), texelFetch(triangleTexels, t + 1),
-                  texelFetch(triangleTexels, t + 2));
+  return Triangle(uintBitsToFloat(texelFetch(triangleTexels, t)), uintBitsToFloat(texelFetch(triangleTexels, t + 1)),
+                  uintBitsToFloat(texelFetch(triangleTexels, t + 2)));
 }
 vec3 loadShadingNormal(uint i) { return texelFetch(normalTexels, int(i)).xyz; }
 Polygon loadPolygon(uint i) {
@@ -277,14 +280,14 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
   while (ref != kBvhNoRef) {
     while (ref < kBvhLeafFlag) {
       int base = int(4u * ref);
-      vec4 a = texelFetch(nodeTexels, base);
-      vec4 b = texelFetch(nodeTexels, base + 1);
-      vec4 c = texelFetch(nodeTexels, base + 2);
-      vec4 d = texelFetch(nodeTexels, base + 3);
-      float enter0 = boxEntry(r, a.xyz, b.xyz, hit.t);
-      float enter1 = boxEntry(r, c.xyz, d.xyz, hit.t);
-      uint ref0 = floatBitsToUint(a.w);
-      uint ref1 = floatBitsToUint(b.w);
+      uvec4 a = texelFetch(nodeTexels, base);
+      uvec4 b = texelFetch(nodeTexels, base + 1);
+      uvec4 c = texelFetch(nodeTexels, base + 2);
+      uvec4 d = texelFetch(nodeTexels, base + 3);
+      float enter0 = boxEntry(r, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), hit.t);
+      float enter1 = boxEntry(r, uintBitsToFloat(c.xyz), uintBitsToFloat(d.xyz), hit.t);
+      uint ref0 = a.w;
+      uint ref1 = b.w;
       bool in0 = !isinf(enter0);
       bool in1 = !isinf(enter1);
       if (in0 && in1) {

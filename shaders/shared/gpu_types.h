@@ -31,11 +31,11 @@ VKRAY_CONST(uint, kBindingMaterials, 1u);    // Material[]
 VKRAY_CONST(uint, kBindingLights, 2u);       // Light[]
 VKRAY_CONST(uint, kBindingSpheres, 3u);      // Sphere[]
 VKRAY_CONST(uint, kBindingPlanes, 4u);       // Plane[]
-VKRAY_CONST(uint, kBindingTriangles, 5u);    // texels: Triangle[] (3 RGBA32F each)
+VKRAY_CONST(uint, kBindingTriangles, 5u);    // texels: Triangle[] (3 RGBA32UI each)
 VKRAY_CONST(uint, kBindingPolygons, 6u);     // Polygon[]
 VKRAY_CONST(uint, kBindingPolyVertices, 7u); // vec4[] polygon vertices (xyz)
 VKRAY_CONST(uint, kBindingNormals, 8u);      // texels: shading normals, 3 per smooth triangle
-VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // texels: BvhWideNode[] (4 RGBA32F each)
+VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // texels: BvhWideNode[] (4 RGBA32UI each)
 VKRAY_CONST(uint, kBindingPrimRefs, 10u);    // texels (R32UI): leaf references, kind << 30 | index
 VKRAY_CONST(uint, kBindingImage, 11u);       // vec4[] linear RGB, row-major, width * height
 VKRAY_CONST(uint, kBindingStats, 12u);       // RayStats
