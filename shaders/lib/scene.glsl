@@ -290,16 +290,16 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
       uint ref1 = b.w;
       bool in0 = !isinf(enter0);
       bool in1 = !isinf(enter1);
-      if (in0 && in1) {
-        // The builder caps the depth at kBvhStackSize, so the stack never overflows.
-        bool firstNearer = enter0 <= enter1;
-        stack[sp++] = firstNearer ? ref1 : ref0;
-        ref = firstNearer ? ref0 : ref1;
-      } else if (in0 || in1) {
-        ref = in0 ? ref0 : ref1;
-      } else {
-        ref = sp > 0 ? stack[--sp] : kBvhNoRef;
-      }
+      // Branch-free step. The farther child is written to the free slot on top of the stack by
+      // every lane, and kept (sp advanced) only where both children are entered: a write under
+      // that condition would be a per-lane loop whose every lane tests the condition and
+      // mispredicts. The builder caps the depth at kBvhStackSize, so sp stays below it here.
+      bool firstNearer = enter0 <= enter1;
+      stack[sp] = firstNearer ? ref1 : ref0;
+      uint popped = stack[max(sp - 1, 0)];
+      bool both = in0 && in1;
+      ref = (in0 && (firstNearer || !in1)) ? ref0 : (in1 ? ref1 : (sp > 0 ? popped : kBvhNoRef));
+      sp += both ? 1 : ((in0 || in1 || sp == 0) ? 0 : -1);
     }
     if (ref == kBvhNoRef) break;
     uint entry = ref & kBvhLeafFirstMask;
