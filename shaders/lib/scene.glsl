@@ -45,10 +45,10 @@ layout(std430, binding = kBindingPolyVertices) readonly buffer PolyVertices { ve
 // The mesh-sized arrays are texel buffers: a texel fetch at per-invocation addresses is one vector
 // gather on lavapipe, where a storage-buffer read is a per-lane loop of scalar loads (2-3x slower
 // traversal, docs/performance.md "Meshes"); and a texel buffer may hold maxTexelBufferElements
-// texels (2 GiB of 16-byte texels on lavapipe) where a storage buffer is capped at maxStorageBufferRange.
-// Triangles and BVH records are read as integers (RGBA32UI) and their coordinates reinterpreted: the
-// fourth words are ids and indices, and small ones read through a float format would be denormals,
-// which Vulkan lets a device flush to zero on the way into a shader.
+// texels (2 GiB of 16-byte texels on lavapipe) where a storage buffer is capped at
+// maxStorageBufferRange. Triangles and BVH records are read as integers (RGBA32UI) and their
+// coordinates reinterpreted: their fourth words are ids and indices, and small ones read through a
+// float format would be denormals, which Vulkan lets a device flush to zero on the way in.
 layout(binding = kBindingTriangles) uniform usamplerBuffer triangleTexels;  // 3 per Triangle
 layout(binding = kBindingNormals) uniform samplerBuffer normalTexels;       // 1 per vertex normal
 layout(binding = kBindingBvhNodes) uniform usamplerBuffer nodeTexels;       // 4 per BvhWideNode
