@@ -297,9 +297,10 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
       bool firstNearer = enter0 <= enter1;
       stack[sp] = firstNearer ? ref1 : ref0;
       uint popped = stack[max(sp - 1, 0)];
-      bool both = in0 && in1;
-      ref = (in0 && (firstNearer || !in1)) ? ref0 : (in1 ? ref1 : (sp > 0 ? popped : kBvhNoRef));
-      sp += both ? 1 : ((in0 || in1 || sp == 0) ? 0 : -1);
+      bool neither = !in0 && !in1;
+      uint nearer = (in0 && (firstNearer || !in1)) ? ref0 : ref1; // the nearer child entered
+      ref = neither ? (sp > 0 ? popped : kBvhNoRef) : nearer;
+      sp += (in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0);
     }
     if (ref == kBvhNoRef) break;
     uint entry = ref & kBvhLeafFirstMask;
