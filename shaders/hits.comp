@@ -22,6 +22,7 @@ layout(push_constant) uniform Push { PushConstants pc; };
 
 void main() {
   gDynamicZero = stats.pad0;
+  loadSceneRegisters(); // before any branch (scene.glsl)
   uvec2 local = gl_GlobalInvocationID.xy;
   uvec2 pixel = pc.tileOrigin + local;
   if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize.xy))) return;

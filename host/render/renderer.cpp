@@ -215,6 +215,7 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   spec.set(gpu::kSpecPlaneCount, count(gpuScene_.planes.size()));
   spec.set(gpu::kSpecOccluderPlaneCount, count(gpuScene_.occluderPlanes));
   spec.set(gpu::kSpecLightCount, count(gpuScene_.lights.size()));
+  spec.set(gpu::kSpecMaterialCount, count(gpuScene_.materials.size()));
   return spec;
 }
 

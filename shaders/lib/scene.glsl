@@ -31,11 +31,13 @@ layout(constant_id = kSpecTriangleCount) const uint TRIANGLE_COUNT = kRuntimeCou
 layout(constant_id = kSpecPolygonCount) const uint POLYGON_COUNT = kRuntimeCount;
 layout(constant_id = kSpecLightCount) const uint LIGHT_COUNT = kRuntimeCount;
 layout(constant_id = kSpecOccluderPlaneCount) const uint OCCLUDER_PLANE_COUNT = kRuntimeCount;
+layout(constant_id = kSpecMaterialCount) const uint MATERIAL_COUNT = kRuntimeCount;
 
 const bool ROBUST = NUMERICS == kNumericsRobust;
 
 // ---- Buffers -------------------------------------------------------------------------------------
-layout(std140, binding = kBindingFrame) uniform FrameBlock { FrameParams frame; };
+layout(std140, binding = kBindingFrame) uniform FrameBlock { FrameParams frameUbo; };
+FrameParams frame; // frameUbo, copied by loadSceneRegisters() (below)
 layout(std430, binding = kBindingMaterials) readonly buffer Materials { Material materials[]; };
 layout(std430, binding = kBindingLights) readonly buffer Lights { Light lights[]; };
 layout(std430, binding = kBindingSpheres) readonly buffer Spheres { Sphere spheres[]; };
@@ -66,25 +68,111 @@ uint occluderPlaneCount() {
 }
 uint lightCount() { return LIGHT_COUNT != kRuntimeCount ? LIGHT_COUNT : opaqueUniform(frame.counts2.x); }
 
-// Scene array access. SCENE_IN_UBO is a specialization constant, so only one of each pair of loads
-// survives compilation.
+// ---- Small scenes in registers -------------------------------------------------------------------
+// llvmpipe reads a uniform buffer with one scalar load only in straight-line code at the top of the
+// kernel: inside any branch or loop (where the whole trace runs) every read is an 8-lane gather with
+// a bounds check, some 30 instructions per component even at a constant address. So
+// loadSceneRegisters(), the first thing each kernel does, reads the frame's parameters and every
+// small array whose count is baked in (kMaxUnrolledCount) into these globals, and the trace reads
+// registers: a constant index (the unrolled loops) is the value itself, a per-lane one (a hit's
+// material) a chain of selects.
+const bool CACHE_MATERIALS = (SCENE_IN_UBO || SHADING_IN_UBO) && MATERIAL_COUNT != kRuntimeCount;
+const bool CACHE_LIGHTS = (SCENE_IN_UBO || SHADING_IN_UBO) && LIGHT_COUNT != kRuntimeCount;
+const bool CACHE_PLANES = (SCENE_IN_UBO || SHADING_IN_UBO) && PLANE_COUNT != kRuntimeCount;
+const bool CACHE_SPHERES = SCENE_IN_UBO && SPHERE_COUNT != kRuntimeCount;
+const bool CACHE_TRIANGLES = SCENE_IN_UBO && TRIANGLE_COUNT != kRuntimeCount;
+const bool CACHE_POLYGONS = SCENE_IN_UBO && POLYGON_COUNT != kRuntimeCount;
+const uint kCachedMaterials = (CACHE_MATERIALS && MATERIAL_COUNT > 0u) ? MATERIAL_COUNT : 1u;
+const uint kCachedLights = (CACHE_LIGHTS && LIGHT_COUNT > 0u) ? LIGHT_COUNT : 1u;
+const uint kCachedPlanes = (CACHE_PLANES && PLANE_COUNT > 0u) ? PLANE_COUNT : 1u;
+const uint kCachedSpheres = (CACHE_SPHERES && SPHERE_COUNT > 0u) ? SPHERE_COUNT : 1u;
+const uint kCachedTriangles = (CACHE_TRIANGLES && TRIANGLE_COUNT > 0u) ? TRIANGLE_COUNT : 1u;
+const uint kCachedPolygons = (CACHE_POLYGONS && POLYGON_COUNT > 0u) ? POLYGON_COUNT : 1u;
+
+Material gMaterials[kCachedMaterials];
+Light gLights[kCachedLights];
+Plane gPlanes[kCachedPlanes];
+Sphere gSpheres[kCachedSpheres];
+Triangle gTriangles[kCachedTriangles];
+Polygon gPolygons[kCachedPolygons];
+
+// The cached values pass through opaqueUniform (common.glsl): read straight from the uniform block
+// at constant offsets, values that decide a branch (a material's diffuse factor, say) would invite
+// lavapipe's dispatch-time uniform inlining, which then recompiles the kernel on every new pipeline.
+vec4 opaqueVec4(vec4 v) { return uintBitsToFloat(floatBitsToUint(v) + gDynamicZero); }
+uvec4 opaqueVec4(uvec4 v) { return v + gDynamicZero; }
+
+// Call first in main(), after gDynamicZero is set, before any branch.
+void loadSceneRegisters() {
+  frame = frameUbo;
+  for (uint k = 0u; CACHE_MATERIALS && k < kCachedMaterials; ++k) {
+    Material m = small.materials[k];
+    gMaterials[k] = Material(opaqueVec4(m.color), opaqueVec4(m.color2), opaqueVec4(m.phong),
+                             opaqueVec4(m.transmission), opaqueVec4(m.absorption));
+  }
+  for (uint k = 0u; CACHE_LIGHTS && k < kCachedLights; ++k) {
+    gLights[k] = Light(opaqueVec4(small.lights[k].position), opaqueVec4(small.lights[k].color));
+  }
+  for (uint k = 0u; CACHE_PLANES && k < kCachedPlanes; ++k) {
+    gPlanes[k] = Plane(opaqueVec4(small.planes[k].normalOffset), opaqueVec4(small.planes[k].meta));
+  }
+  for (uint k = 0u; CACHE_SPHERES && k < kCachedSpheres; ++k) {
+    gSpheres[k] = Sphere(opaqueVec4(small.spheres[k].centerRadius), opaqueVec4(small.spheres[k].meta));
+  }
+  for (uint k = 0u; CACHE_TRIANGLES && k < kCachedTriangles; ++k) {
+    Triangle t = small.triangles[k];
+    gTriangles[k] = Triangle(opaqueVec4(t.v0), opaqueVec4(t.v1), opaqueVec4(t.v2));
+  }
+  for (uint k = 0u; CACHE_POLYGONS && k < kCachedPolygons; ++k) {
+    Polygon q = small.polygons[k];
+    gPolygons[k] = Polygon(opaqueVec4(q.plane), opaqueVec4(q.meta));
+  }
+}
+
+// Scene array access. The specialization constants leave one way of each: registers, the uniform
+// block, or the storage buffers.
 Material loadMaterial(uint i) {
+  if (CACHE_MATERIALS) {
+    Material m = gMaterials[0];
+    for (uint k = 1u; k < kCachedMaterials; ++k) m = i == k ? gMaterials[k] : m;
+    return m;
+  }
   if (SCENE_IN_UBO || SHADING_IN_UBO) return small.materials[i];
   return materials[i];
 }
 Light loadLight(uint i) {
+  if (CACHE_LIGHTS) {
+    Light m = gLights[0];
+    for (uint k = 1u; k < kCachedLights; ++k) m = i == k ? gLights[k] : m;
+    return m;
+  }
   if (SCENE_IN_UBO || SHADING_IN_UBO) return small.lights[i];
   return lights[i];
 }
 Sphere loadSphere(uint i) {
+  if (CACHE_SPHERES) {
+    Sphere m = gSpheres[0];
+    for (uint k = 1u; k < kCachedSpheres; ++k) m = i == k ? gSpheres[k] : m;
+    return m;
+  }
   if (SCENE_IN_UBO) return small.spheres[i];
   return spheres[i];
 }
 Plane loadPlane(uint i) {
+  if (CACHE_PLANES) {
+    Plane m = gPlanes[0];
+    for (uint k = 1u; k < kCachedPlanes; ++k) m = i == k ? gPlanes[k] : m;
+    return m;
+  }
   if (SCENE_IN_UBO || SHADING_IN_UBO) return small.planes[i];
   return planes[i];
 }
 Triangle loadTriangle(uint i) {
+  if (CACHE_TRIANGLES) {
+    Triangle m = gTriangles[0];
+    for (uint k = 1u; k < kCachedTriangles; ++k) m = i == k ? gTriangles[k] : m;
+    return m;
+  }
   if (SCENE_IN_UBO) return small.triangles[i];
   int t = int(3u * i);
   return Triangle(uintBitsToFloat(texelFetch(triangleTexels, t)), uintBitsToFloat(texelFetch(triangleTexels, t + 1)),
@@ -92,6 +180,11 @@ Triangle loadTriangle(uint i) {
 }
 vec3 loadShadingNormal(uint i) { return texelFetch(normalTexels, int(i)).xyz; }
 Polygon loadPolygon(uint i) {
+  if (CACHE_POLYGONS) {
+    Polygon m = gPolygons[0];
+    for (uint k = 1u; k < kCachedPolygons; ++k) m = i == k ? gPolygons[k] : m;
+    return m;
+  }
   if (SCENE_IN_UBO) return small.polygons[i];
   return polygons[i];
 }

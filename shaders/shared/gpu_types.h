@@ -89,7 +89,9 @@ VKRAY_CONST(uint, kSpecOccluderPlaneCount, 22u); // planes that can cast a shado
 VKRAY_CONST(uint, kSpecRefinePass, 23u);
 // Materials, lights and planes read from the uniform block even when the primitives are not.
 VKRAY_CONST(uint, kSpecShadingInUbo, 24u);
-VKRAY_CONST(uint, kSpecCount, 25u);
+// Materials up to kMaxUnrolledCount are read into registers (scene.glsl, loadSceneRegisters).
+VKRAY_CONST(uint, kSpecMaterialCount, 25u);
+VKRAY_CONST(uint, kSpecCount, 26u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
