@@ -28,14 +28,16 @@ bool isUniformBinding(std::uint32_t b) {
   return b == gpu::kBindingFrame || b == gpu::kBindingSceneUbo;
 }
 
-// The mesh-sized arrays are texel buffers (see shaders/lib/scene.glsl); BVH references are R32UI,
-// the others RGBA32F.
+// The mesh-sized arrays are texel buffers (see shaders/lib/scene.glsl); BVH records and triangles,
+// the hottest, are storage texel buffers (imageLoad compiles inline on lavapipe), the others
+// uniform texel buffers.
 bool isTexelBinding(std::uint32_t b) {
   return b == gpu::kBindingTriangles || b == gpu::kBindingNormals || b == gpu::kBindingBvhNodes ||
          b == gpu::kBindingPrimRefs;
 }
 
 vk::DescriptorType descriptorType(std::uint32_t b) {
+  if (b == gpu::kBindingBvhNodes || b == gpu::kBindingTriangles) return vk::DescriptorType::eStorageTexelBuffer;
   if (isTexelBinding(b)) return vk::DescriptorType::eUniformTexelBuffer;
   return isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
 }
@@ -88,7 +90,8 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
     vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(gpu::PushConstants));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, push));
-    std::array<vk::DescriptorPoolSize, 3> sizes{
+    std::array<vk::DescriptorPoolSize, 4> sizes{
+        vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 2),
         vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
         vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount),
         vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, 4)};

@@ -99,8 +99,8 @@ vk::DeviceSize checkedTexelBytes(const Context& context, vk::DeviceSize size, vk
 } // namespace
 
 Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name)
-    : Buffer(context, checkedTexelBytes(context, size, texelFormat, name), vk::BufferUsageFlagBits::eUniformTexelBuffer,
-             use, name) {
+    : Buffer(context, checkedTexelBytes(context, size, texelFormat, name),
+             vk::BufferUsageFlagBits::eUniformTexelBuffer | vk::BufferUsageFlagBits::eStorageTexelBuffer, use, name) {
   vulkanStep("creating the texel view of '" + name_ + "'", [&] {
     view_ =
         vk::raii::BufferView(context.device(), vk::BufferViewCreateInfo({}, *buffer_, texelFormat, 0, VK_WHOLE_SIZE));

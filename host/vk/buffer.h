@@ -23,8 +23,8 @@ public:
   // size 0 is rounded up (Vulkan forbids empty buffers). A storage buffer larger than the device's
   // maxStorageBufferRange throws, naming the limit.
   Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use, std::string name);
-  // A uniform texel buffer read as texels of `texelFormat` (RGBA32F or R32UI), with its view. More
-  // texels than the device's maxTexelBufferElements throws, naming the limit.
+  // A texel buffer (usable as a uniform or a storage texel buffer) read as texels of `texelFormat`,
+  // with its view. More texels than the device's maxTexelBufferElements throws, naming the limit.
   Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name);
   Buffer(Buffer&&) noexcept = default;
   Buffer& operator=(Buffer&&) noexcept = default;
