@@ -212,6 +212,47 @@ TEST(RenderSpecialization, SceneMemoryLayoutsAgree) {
   EXPECT_EQ(render(s, storage).image.pixels, render(s, uniform).image.pixels);
 }
 
+// A small scene of every kind (baked counts, read into registers before the first branch:
+// loadSceneRegisters in shaders/lib/scene.glsl) gives the image of the all-features pipeline, which
+// reads every array from memory at run-time counts, and of the storage-buffer layout. Several of
+// each kind, so that a hit's material, sphere, plane, triangle or polygon is picked per lane.
+TEST(RenderSpecialization, SceneInRegistersAgreesWithMemory) {
+  Scene s = sceneFromJson(R"({
+    "camera": { "position": [0, 2, 7], "look_at": [0, 0.6, 0], "fov_y": 50 },
+    "image": { "width": 48, "height": 36 },
+    "render": { "max_depth": 3 },
+    "materials": {
+      "a": { "color": [0.8, 0.3, 0.2], "diffuse": 0.8, "ambient": 0.1, "specular": 0.4, "shininess": 30 },
+      "b": { "color": [0.2, 0.6, 0.8], "diffuse": 0.6, "reflection": 0.4 },
+      "c": { "color": [0.9, 0.9, 0.8], "diffuse": 0.7, "checker": { "color2": [0.1, 0.1, 0.1], "scale": 0.5 } },
+      "d": { "color": [0.3, 0.8, 0.3], "diffuse": 0.5, "specular": 0.6, "shininess": 80, "reflection": 0.2 }
+    },
+    "lights": [ { "position": [-3, 6, 4], "color": [0.8, 0.8, 0.8] },
+                { "position": [4, 3, 2], "color": [0.4, 0.4, 0.5] },
+                { "position": [0, 5, -4], "color": [0.2, 0.3, 0.2], "shadows": false } ],
+    "objects": [
+      { "type": "plane", "normal": [0, 1, 0], "offset": 0, "material": "c" },
+      { "type": "plane", "normal": [0, 0, 1], "offset": 6, "material": "b" },
+      { "type": "sphere", "center": [-1.5, 0.7, 0], "radius": 0.7, "material": "a" },
+      { "type": "sphere", "center": [1.4, 0.6, 0.5], "radius": 0.6, "material": "b" },
+      { "type": "sphere", "center": [0, 0.4, 1.5], "radius": 0.4, "material": "d" },
+      { "type": "triangle", "vertices": [[-2.5, 0, -1.5], [-0.5, 0, -1.5], [-1.5, 1.8, -1.5]], "material": "d" },
+      { "type": "triangle", "vertices": [[0.5, 0, -1.5], [2.5, 0, -1.5], [1.5, 1.5, -1.2]], "material": "a" },
+      { "type": "polygon", "vertices": [[-0.6, 0.01, -0.4], [0.6, 0.01, -0.4], [0.6, 1.0, -0.4], [-0.6, 1.0, -0.4]], "material": "a" },
+      { "type": "polygon", "vertices": [[2.0, 0.01, 1.8], [2.8, 0.01, 1.2], [2.8, 1.2, 1.2], [2.0, 1.2, 1.8]], "material": "d" }
+    ] })");
+  s.render.bvh = BvhMode::Off; // brute force: the counts stay baked
+  RenderResult registers = render(s);
+  RenderOptions general;
+  general.specialize = false;
+  RenderOptions storage;
+  storage.sceneMemory = SceneMemory::Storage;
+  EXPECT_EQ(registers.image.pixels, render(s, general).image.pixels);
+  EXPECT_EQ(registers.image.pixels, render(s, storage).image.pixels);
+  EXPECT_GT(registers.stats.shadow, 0u);
+  EXPECT_GT(registers.stats.reflection, 0u);
+}
+
 // A scene too large for the uniform block still reads its materials, lights and planes from it
 // (on a CPU device): the same image as with everything in storage buffers.
 TEST(RenderSpecialization, ShadingFromTheUniformBlockAgreesWithStorage) {
