@@ -22,17 +22,17 @@ float intersectSphereRobust(Ray ray, float a, vec3 center, float radius, float t
   vec3 l = f + (bPrime / a) * ray.dir; // f minus its projection on d: centre-to-line vector
   float r2 = radius * radius;
   float discA = r2 - dot(l, l);        // = disc / a
-  if (discA < 0.0) return -1.0;
   float c = dot(f, f) - r2;
-  float q = bPrime + signNonZero(bPrime) * sqrt(a * discA);
-  if (q == 0.0) return -1.0;           // degenerate direction (a == 0) or ray through the centre of a point
+  float q = bPrime + signNonZero(bPrime) * sqrt(a * max(discA, 0.0));
   float t0 = c / q;
   float t1 = q / a;
   float tNear = min(t0, t1);
   float tFar = max(t0, t1);
-  if (tNear > 0.0 && tNear < tMax) return tNear;
-  if (tFar > 0.0 && tFar < tMax) return tFar;
-  return -1.0;
+  float t = (tNear > 0.0 && tNear < tMax) ? tNear : ((tFar > 0.0 && tFar < tMax) ? tFar : -1.0);
+  // A miss (discA < 0), or a degenerate direction (a == 0) or ray through the centre of a point
+  // (q == 0). Selects, not early returns: on CPU drivers a return inside a lane's branch costs
+  // the masking of everything after it.
+  return (discA < 0.0 || q == 0.0) ? -1.0 : t;
 }
 
 // The textbook quadratic formula with a fixed epsilon on t (as in most first ray tracers).
