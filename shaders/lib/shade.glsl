@@ -133,22 +133,20 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
     Light light = loadLight(i);
     vec3 toLight = light.position.xyz - s.p;
     float dist = length(toLight);
-    if (dist <= 0.0) continue;
     vec3 l = toLight / dist;
-    // A light behind the surface (geometrically, or for the shading normal) does not light it.
-    if (dot(ngf, l) <= 0.0) continue;
     float ndotl = dot(nsf, l);
-    if (ndotl <= 0.0) continue;
-    vec3 visible = vec3(1.0);
-    if (SHADOWS && light.position.w > 0.0) {
-      visible = shadowTransmittance(origin, light.position.xyz);
-      if (maxComponent(visible) <= 0.0) continue;
+    // A light behind the surface (geometrically, or for the shading normal) does not light it.
+    // One condition instead of a `continue` per test: on CPU drivers each masks the rest.
+    bool lit = dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0;
+    if (lit) {
+      vec3 visible = vec3(1.0);
+      if (SHADOWS && light.position.w > 0.0) visible = shadowTransmittance(origin, light.position.xyz);
+      vec3 r = reflect(-l, nsf);
+      float rv = dot(r, v);
+      // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
+      float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
+      if (maxComponent(visible) > 0.0) color += visible * light.color.rgb * (kd * ndotl * base + spec);
     }
-    vec3 r = reflect(-l, nsf);
-    float rv = dot(r, v);
-    // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
-    float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
-    color += visible * light.color.rgb * (kd * ndotl * base + spec);
   }
   return color;
 }
