@@ -18,13 +18,13 @@ const int kSpawnUlps = 1;
 // x moved `ulps` representable floats in the direction of dir's sign; never past zero into the
 // other sign by more than zero, never to Inf.
 float stepUlps(float x, float dir, int ulps) {
-  if (dir == 0.0) return x;
   bool up = dir > 0.0;
   bool away = x == 0.0 || ((x > 0.0) == up); // moving away from zero grows the magnitude bits
   int bits = floatBitsToInt(abs(x));
   bits = away ? min(bits + ulps, 0x7F7FFFFF) : max(bits - ulps, 0);
   float m = intBitsToFloat(bits);
-  return (x > 0.0 || (x == 0.0 && up)) ? m : -m;
+  float stepped = (x > 0.0 || (x == 0.0 && up)) ? m : -m;
+  return dir == 0.0 ? x : stepped; // a select, not an early return (masking on CPU drivers)
 }
 
 // errorBound bounds the distance of p from the true surface along n, and the rounding the next

@@ -79,15 +79,17 @@ vec3 baseColor(Material mat, Surface s) {
 vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   vec3 toLight = lightPos - origin;
   float dist = length(toLight);
-  if (dist <= 0.0) return vec3(1.0);
   vec3 dir = toLight / dist;
   // SHADOW_MODE is attenuated only when some material transmits (host/render/renderer.cpp), and
   // independently of max_depth: glass casts a light shadow even when no refracted ray is traced.
   if (SHADOW_MODE == kShadowsOpaque) {
-    if (COUNT_STATS) gShadowRays++;
+    // An origin at the light (dist 0) is lit; its NaN direction meets nothing. Selects, not an
+    // early return: on CPU drivers a return masks all the code after it.
+    if (COUNT_STATS) gShadowRays += uint(dist > 0.0);
     Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true);
-    return h.kind == kNoHit ? vec3(1.0) : vec3(0.0);
+    return (dist <= 0.0 || h.kind == kNoHit) ? vec3(1.0) : vec3(0.0);
   }
+  if (dist <= 0.0) return vec3(1.0);
   vec3 transmit = vec3(1.0);
   vec3 o = origin;
   float travelled = 0.0; // along the shadow ray from the first origin
@@ -126,7 +128,7 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
   float kd = mat.phong.x;
   float ks = mat.phong.y;
   float shininess = mat.phong.z;
-  if (kd <= 0.0 && ks <= 0.0) return color; // nothing to light: no shadow rays either
+  bool lightable = kd > 0.0 || ks > 0.0; // else nothing to light: no shadow rays either
   vec3 v = -rayDir;
   vec3 origin = ROBUST ? spawnOrigin(s.p, ngf, s.errorBound) : s.p;
   for (uint i = 0u; i < lightCount(); ++i) {
@@ -137,7 +139,7 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
     float ndotl = dot(nsf, l);
     // A light behind the surface (geometrically, or for the shading normal) does not light it.
     // One condition instead of a `continue` per test: on CPU drivers each masks the rest.
-    bool lit = dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0;
+    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0;
     if (lit) {
       vec3 visible = vec3(1.0);
       if (SHADOWS && light.position.w > 0.0) visible = shadowTransmittance(origin, light.position.xyz);
