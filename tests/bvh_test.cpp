@@ -658,7 +658,9 @@ TEST(GpuBvh, QueryKernelAgreesWithTheRenderer) {
     bool dark = shadowed.pixels[i] != unlit.pixels[i];
     blocked += h.w > 0.0f;
     drawnInShadow += dark;
-    if (dark) EXPECT_EQ(h.w, 1.0f) << "pixel " << i << ": drawn in shadow, but its shadow ray was not blocked";
+    if (dark) {
+      EXPECT_EQ(h.w, 1.0f) << "pixel " << i << ": drawn in shadow, but its shadow ray was not blocked";
+    }
   }
   EXPECT_GT(hitCount, 3000u);
   EXPECT_GT(drawnInShadow, 200u) << "the scene must have shadows to compare";
