@@ -78,7 +78,9 @@ uint lightCount() { return LIGHT_COUNT != kRuntimeCount ? LIGHT_COUNT : opaqueUn
 // loadSceneRegisters(), the first thing each kernel does, reads the frame's parameters and every
 // small array whose count is baked in (kMaxUnrolledCount) into these globals, and the trace reads
 // registers: a constant index (the unrolled loops) is the value itself, a per-lane one (a hit's
-// material) a chain of selects.
+// material) a chain of selects. Only arrays read from the uniform block are cached, which the host
+// chooses on CPU devices (or with --scene-memory uniform): a GPU reads uniforms through a constant
+// cache, and keeping them live in registers would only cost it occupancy.
 const bool CACHE_MATERIALS = (SCENE_IN_UBO || SHADING_IN_UBO) && MATERIAL_COUNT != kRuntimeCount;
 const bool CACHE_LIGHTS = (SCENE_IN_UBO || SHADING_IN_UBO) && LIGHT_COUNT != kRuntimeCount;
 const bool CACHE_PLANES = (SCENE_IN_UBO || SHADING_IN_UBO) && PLANE_COUNT != kRuntimeCount;
