@@ -101,6 +101,21 @@ Sphere gSpheres[kCachedSpheres];
 Triangle gTriangles[kCachedTriangles];
 Polygon gPolygons[kCachedPolygons];
 
+// cachedX(i): element i of a cached array as a chain of selects over the registers; a constant i
+// (an unrolled loop) folds to the element itself.
+#define VKRAY_DEFINE_CACHED_READ(Type, name, array, count)                                          \
+  Type name(uint i) {                                                                              \
+    Type picked = array[0];                                                                        \
+    for (uint k = 1u; k < count; ++k) picked = i == k ? array[k] : picked;                         \
+    return picked;                                                                                 \
+  }
+VKRAY_DEFINE_CACHED_READ(Material, cachedMaterial, gMaterials, kCachedMaterials)
+VKRAY_DEFINE_CACHED_READ(Light, cachedLight, gLights, kCachedLights)
+VKRAY_DEFINE_CACHED_READ(Plane, cachedPlane, gPlanes, kCachedPlanes)
+VKRAY_DEFINE_CACHED_READ(Sphere, cachedSphere, gSpheres, kCachedSpheres)
+VKRAY_DEFINE_CACHED_READ(Triangle, cachedTriangle, gTriangles, kCachedTriangles)
+VKRAY_DEFINE_CACHED_READ(Polygon, cachedPolygon, gPolygons, kCachedPolygons)
+
 // The cached values pass through opaqueUniform (common.glsl): read straight from the uniform block
 // at constant offsets, values that decide a branch (a material's diffuse factor, say) would invite
 // lavapipe's dispatch-time uniform inlining, which then recompiles the kernel on every new pipeline.
@@ -137,47 +152,27 @@ void loadSceneRegisters() {
 // Scene array access. The specialization constants leave one way of each: registers, the uniform
 // block, or the storage buffers.
 Material loadMaterial(uint i) {
-  if (CACHE_MATERIALS) {
-    Material m = gMaterials[0];
-    for (uint k = 1u; k < kCachedMaterials; ++k) m = i == k ? gMaterials[k] : m;
-    return m;
-  }
+  if (CACHE_MATERIALS) return cachedMaterial(i);
   if (SCENE_IN_UBO || SHADING_IN_UBO) return small.materials[i];
   return materials[i];
 }
 Light loadLight(uint i) {
-  if (CACHE_LIGHTS) {
-    Light m = gLights[0];
-    for (uint k = 1u; k < kCachedLights; ++k) m = i == k ? gLights[k] : m;
-    return m;
-  }
+  if (CACHE_LIGHTS) return cachedLight(i);
   if (SCENE_IN_UBO || SHADING_IN_UBO) return small.lights[i];
   return lights[i];
 }
 Sphere loadSphere(uint i) {
-  if (CACHE_SPHERES) {
-    Sphere m = gSpheres[0];
-    for (uint k = 1u; k < kCachedSpheres; ++k) m = i == k ? gSpheres[k] : m;
-    return m;
-  }
+  if (CACHE_SPHERES) return cachedSphere(i);
   if (SCENE_IN_UBO) return small.spheres[i];
   return spheres[i];
 }
 Plane loadPlane(uint i) {
-  if (CACHE_PLANES) {
-    Plane m = gPlanes[0];
-    for (uint k = 1u; k < kCachedPlanes; ++k) m = i == k ? gPlanes[k] : m;
-    return m;
-  }
+  if (CACHE_PLANES) return cachedPlane(i);
   if (SCENE_IN_UBO || SHADING_IN_UBO) return small.planes[i];
   return planes[i];
 }
 Triangle loadTriangle(uint i) {
-  if (CACHE_TRIANGLES) {
-    Triangle m = gTriangles[0];
-    for (uint k = 1u; k < kCachedTriangles; ++k) m = i == k ? gTriangles[k] : m;
-    return m;
-  }
+  if (CACHE_TRIANGLES) return cachedTriangle(i);
   if (SCENE_IN_UBO) return small.triangles[i];
   int t = int(3u * i);
   return Triangle(uintBitsToFloat(imageLoad(triangleTexels, t)), uintBitsToFloat(imageLoad(triangleTexels, t + 1)),
@@ -185,11 +180,7 @@ Triangle loadTriangle(uint i) {
 }
 vec3 loadShadingNormal(uint i) { return texelFetch(normalTexels, int(i)).xyz; }
 Polygon loadPolygon(uint i) {
-  if (CACHE_POLYGONS) {
-    Polygon m = gPolygons[0];
-    for (uint k = 1u; k < kCachedPolygons; ++k) m = i == k ? gPolygons[k] : m;
-    return m;
-  }
+  if (CACHE_POLYGONS) return cachedPolygon(i);
   if (SCENE_IN_UBO) return small.polygons[i];
   return polygons[i];
 }
