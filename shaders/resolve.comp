@@ -1,20 +1,29 @@
 // The viewer's resolve pass: turns the Renderer's per-pixel sums into displayable colour (average,
-// clamp, sRGB encode) in a storage image that is then blitted to the swapchain.
+// clamp, sRGB encode). Built twice (CMakeLists.txt): by default it writes a half-float image that is
+// then blitted (and scaled) to the swapchain; with VKRAY_RESOLVE_DIRECT it writes the swapchain image
+// itself, whatever its 8-bit format, which saves the blit and an image where the device allows it
+// (host/viewer/presenter.h).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 
 #include "shared/resolve_types.h"
 
-layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_size_z = 1) in;
+layout(local_size_x = kResolveGroupX, local_size_y = kResolveGroupY, local_size_z = 1) in;
 
 layout(constant_id = kResolveSpecEncodeSrgb) const bool ENCODE_SRGB = true;
 
 // The sums arrive as an image copied from the Renderer's buffer: on lavapipe a texel fetch is one
 // vector gather, a storage-buffer read a per-lane loop (it was 80 % of this pass's time).
 layout(binding = kResolveBindingSums) uniform sampler2D sums;
+#ifdef VKRAY_RESOLVE_DIRECT
+// The swapchain image: no format named (shaderStorageImageWriteWithoutFormat), so one pipeline
+// writes BGRA and RGBA images alike; the store rounds to 8 bits.
+layout(binding = kResolveBindingDisplay) writeonly uniform image2D display;
+#else
 // Half floats hold both sRGB-encoded values (for a UNORM swapchain, which the blit copies as they
 // are) and linear ones (for an sRGB swapchain, which the blit encodes) without visible banding.
 layout(binding = kResolveBindingDisplay, rgba16f) writeonly uniform image2D display;
+#endif
 
 // IEC 61966-2-1, as host/image/image.cpp encodes PNGs; branch-free (mix), since CPU drivers run
 // both sides of a branch anyway.

@@ -271,19 +271,13 @@ TEST_F(Viewer, ScriptedRunExitsCleanlyUnderValidation) {
 
 // What the window shows is the Renderer's image: read back from the swapchain image after the overlay
 // (--screenshot-window) and compared with the Renderer's own screenshot of the same frame. Right of the
-// overlay's panel they agree to one 8-bit level: the resolve pass encodes sRGB with the GPU's pow into
-// a half-float image and the blit rounds that to 8 bits, while the PNG writer encodes the float sums
-// on the host; a swapped channel, a flipped row order or a missing/double sRGB encoding would be off by
-// far more. Under the panel the overlay was drawn on the window, and not into the screenshot.
-TEST_F(Viewer, TheWindowShowsTheRenderersImageWithTheOverlayOnTop) {
-  fs::path shot = dir_ / "shot.png";
-  fs::path window = dir_ / "window.png";
-  RunResult r =
-      vkray("view '" + scene("showcase.json") + "' --width 480 --height 200 --frames 2 --no-vsync --screenshot '" +
-            shot.string() + "' --screenshot-window '" + window.string() + "' --validate --stats");
-  ASSERT_EQ(r.exitCode, 0) << r.err;
-  EXPECT_EQ(r.err, "");
-  EXPECT_NE(r.out.find("present mode: no vsync ("), std::string::npos) << "--no-vsync\n" << r.out;
+// overlay's panel they agree to one 8-bit level: the resolve pass encodes sRGB with the GPU's pow and
+// the store (direct path) or the blit (from a half-float image) rounds that to 8 bits, while the PNG
+// writer encodes the float sums on the host; a swapped channel, a flipped row order or a
+// missing/double sRGB encoding would be off by far more. Under the panel the overlay was drawn on the
+// window, and not into the screenshot. Both resolve paths (presenter.h) are checked: lavapipe's
+// swapchain images are storage images, so the default is the direct one.
+void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& window) {
   Image a = readImage(shot);
   Image b = readImage(window);
   ASSERT_EQ(a.width, b.width);
@@ -304,6 +298,23 @@ TEST_F(Viewer, TheWindowShowsTheRenderersImageWithTheOverlayOnTop) {
   }
   EXPECT_LE(maxOutside, 1) << "8-bit levels between the window and the Renderer's image";
   EXPECT_GT(differentInside, std::size_t(kPanelRight) * a.height / 2) << "the overlay covers its panel";
+}
+
+TEST_F(Viewer, TheWindowShowsTheRenderersImageWithTheOverlayOnTop) {
+  for (const std::string path : {"direct", "blit"}) {
+    SCOPED_TRACE(path);
+    fs::path shot = dir_ / (path + "-shot.png");
+    fs::path window = dir_ / (path + "-window.png");
+    RunResult r =
+        vkray("view '" + scene("showcase.json") + "' --width 480 --height 200 --frames 2 --no-vsync --screenshot '" +
+              shot.string() + "' --screenshot-window '" + window.string() + "' --validate --stats" +
+              (path == "blit" ? " --no-direct-resolve" : ""));
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_NE(r.out.find("present mode: no vsync ("), std::string::npos) << "--no-vsync\n" << r.out;
+    EXPECT_NE(r.out.find("resolve path: " + path + "\n"), std::string::npos) << r.out;
+    expectWindowShowsRenderersImage(shot, window);
+  }
 }
 
 // The viewer traces sample k of every pixel's sequence in frame k and adds it to the sums; the

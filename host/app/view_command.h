@@ -21,6 +21,7 @@ struct ViewArgs {
   bool noOverlay = false;
   bool noRayCounts = false;
   bool noSpecialize = false;
+  bool noDirectResolve = false;
   bool stats = false;
   std::uint32_t frames = 0;
   std::filesystem::path screenshot;

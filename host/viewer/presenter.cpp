@@ -4,8 +4,10 @@
 #include <array>
 
 #include "../../shaders/shared/resolve_types.h"
-#include "resolve_spv.h" // kResolveSpv: shaders/resolve.comp compiled at build time
+#include "resolve_direct_spv.h" // kResolveDirectSpv: the same with VKRAY_RESOLVE_DIRECT
+#include "resolve_spv.h"        // kResolveSpv: shaders/resolve.comp compiled at build time
 #include "util/error.h"
+#include "viewer/swapchain.h"
 
 namespace vkray {
 
@@ -27,7 +29,7 @@ std::uint32_t deviceLocalType(const vulkan::Context& context, std::uint32_t type
 
 } // namespace
 
-Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cache, bool encodeSrgb)
+Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cache, bool encodeSrgb, bool allowDirect)
     : context_(context) {
   const auto& device = context.device();
   vulkan::vulkanStep("creating the viewer's resolve pass", [&] {
@@ -54,6 +56,48 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
   pipeline_ =
       std::make_unique<vulkan::ComputePipeline>(context, std::span<const std::uint32_t>(kResolveSpv), *pipelineLayout_,
                                                 spec, cache ? &cache->cache() : nullptr, "resolve");
+  if (allowDirect && context.storageWriteWithoutFormatEnabled()) {
+    directPipeline_ = std::make_unique<vulkan::ComputePipeline>(
+        context, std::span<const std::uint32_t>(kResolveDirectSpv), *pipelineLayout_, spec,
+        cache ? &cache->cache() : nullptr, "direct resolve");
+  }
+}
+
+void Presenter::attach(const Swapchain& swapchain) {
+  detach();
+  if (!directPipeline_ || !swapchain.storable() || swapchain.imageCount() == 0) return;
+  const auto& device = context_.device();
+  vulkan::vulkanStep("creating the viewer's direct resolve sets", [&] {
+    const auto n = static_cast<std::uint32_t>(swapchain.imageCount());
+    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, n),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, n)};
+    directPool_ = vk::raii::DescriptorPool(
+        device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, n, sizes));
+    std::vector<vk::DescriptorSetLayout> layouts(n, *setLayout_);
+    directSets_ = vk::raii::DescriptorSets(device, vk::DescriptorSetAllocateInfo(*directPool_, layouts));
+    for (std::uint32_t i = 0; i < n; ++i) {
+      vk::DescriptorImageInfo imageInfo(nullptr, swapchain.view(i), vk::ImageLayout::eGeneral);
+      vk::WriteDescriptorSet write(*directSets_[i], gpu::kResolveBindingDisplay, 0, 1,
+                                   vk::DescriptorType::eStorageImage, &imageInfo);
+      device.updateDescriptorSets(write, {});
+    }
+  });
+  if (*sumsCopy_.view) writeSums();
+}
+
+void Presenter::detach() {
+  directSets_.clear();
+  directPool_ = vk::raii::DescriptorPool(nullptr);
+}
+
+void Presenter::writeSums() {
+  vk::DescriptorImageInfo sumsInfo(*sampler_, *sumsCopy_.view, vk::ImageLayout::eShaderReadOnlyOptimal);
+  std::vector<vk::WriteDescriptorSet> writes;
+  writes.emplace_back(*set_, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eCombinedImageSampler, &sumsInfo);
+  for (const auto& set : directSets_) {
+    writes.emplace_back(*set, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eCombinedImageSampler, &sumsInfo);
+  }
+  context_.device().updateDescriptorSets(writes, {});
 }
 
 Presenter::OwnedImage Presenter::makeImage(vk::Format format, vk::ImageUsageFlags usage, vk::Extent2D size) const {
@@ -81,20 +125,17 @@ void Presenter::bind(vk::Buffer sums, vk::Extent2D size) {
       display_ =
           makeImage(kDisplayFormat, vk::ImageUsageFlagBits::eStorage | vk::ImageUsageFlagBits::eTransferSrc, size);
     }
-    vk::DescriptorImageInfo sumsInfo(*sampler_, *sumsCopy_.view, vk::ImageLayout::eShaderReadOnlyOptimal);
     vk::DescriptorImageInfo displayInfo(nullptr, *display_.view, vk::ImageLayout::eGeneral);
-    std::array<vk::WriteDescriptorSet, 2> writes{
-        vk::WriteDescriptorSet(*set_, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eCombinedImageSampler,
-                               &sumsInfo),
-        vk::WriteDescriptorSet(*set_, gpu::kResolveBindingDisplay, 0, 1, vk::DescriptorType::eStorageImage,
-                               &displayInfo)};
-    context_.device().updateDescriptorSets(writes, {});
+    vk::WriteDescriptorSet write(*set_, gpu::kResolveBindingDisplay, 0, 1, vk::DescriptorType::eStorageImage,
+                                 &displayInfo);
+    context_.device().updateDescriptorSets(write, {});
+    writeSums();
   });
   sums_ = sums;
   size_ = size;
 }
 
-void Presenter::recordResolve(const vk::raii::CommandBuffer& cmd) const {
+void Presenter::recordResolve(const vk::raii::CommandBuffer& cmd, const Target& target) const {
   using Stage = vk::PipelineStageFlagBits;
   using Access = vk::AccessFlagBits;
   using Layout = vk::ImageLayout;
@@ -109,27 +150,40 @@ void Presenter::recordResolve(const vk::raii::CommandBuffer& cmd) const {
                              vk::Extent3D(size_.width, size_.height, 1));
   cmd.copyBufferToImage(sums_, *sumsCopy_.image, Layout::eTransferDstOptimal, region);
 
-  // The copy -> texel fetches. The display image was read by the previous frame's blit
-  // (Stage::eTransfer orders that); its old contents are not needed either.
+  // The copy -> texel fetches. The written image's old contents are not needed: the display image
+  // was read by the previous frame's blit, the swapchain image by presentation (the acquire
+  // semaphore, waited for at the transfer stage, chains to this barrier's source scope).
+  const bool toSwapchain = direct(target);
   std::array<vk::ImageMemoryBarrier, 2> toResolve{
       vk::ImageMemoryBarrier(Access::eTransferWrite, Access::eShaderRead, Layout::eTransferDstOptimal,
                              Layout::eShaderReadOnlyOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
                              *sumsCopy_.image, kColorRange),
       vk::ImageMemoryBarrier({}, Access::eShaderWrite, Layout::eUndefined, Layout::eGeneral, VK_QUEUE_FAMILY_IGNORED,
-                             VK_QUEUE_FAMILY_IGNORED, *display_.image, kColorRange)};
+                             VK_QUEUE_FAMILY_IGNORED, toSwapchain ? target.image : *display_.image, kColorRange)};
   cmd.pipelineBarrier(Stage::eTransfer, Stage::eComputeShader, {}, {}, {}, toResolve);
 
-  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, pipeline_->handle());
-  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*set_}, {});
+  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, (toSwapchain ? directPipeline_ : pipeline_)->handle());
+  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0,
+                         {toSwapchain ? *directSets_[target.index] : *set_}, {});
   // Round up: the shader bounds-checks the partial workgroups at the edges.
-  cmd.dispatch((size_.width + gpu::kWorkgroupSizeX - 1) / gpu::kWorkgroupSizeX,
-               (size_.height + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY, 1);
+  cmd.dispatch((size_.width + gpu::kResolveGroupX - 1) / gpu::kResolveGroupX,
+               (size_.height + gpu::kResolveGroupY - 1) / gpu::kResolveGroupY, 1);
 }
 
-void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, vk::Image target, vk::Extent2D targetExtent) const {
+void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, const Target& target) const {
   using Stage = vk::PipelineStageFlagBits;
   using Access = vk::AccessFlagBits;
   using Layout = vk::ImageLayout;
+  if (direct(target)) {
+    // The resolve wrote the picture: on to the layout the overlay's pass starts from, its writes
+    // before that pass loads and draws on the image.
+    vk::ImageMemoryBarrier written(Access::eShaderWrite, Access::eColorAttachmentRead | Access::eColorAttachmentWrite,
+                                   Layout::eGeneral, Layout::eTransferDstOptimal, VK_QUEUE_FAMILY_IGNORED,
+                                   VK_QUEUE_FAMILY_IGNORED, target.image, kColorRange);
+    cmd.pipelineBarrier(Stage::eComputeShader, Stage::eColorAttachmentOutput, {}, {}, {}, written);
+    return;
+  }
+  const vk::Extent2D targetExtent = target.extent;
 
   // Display image: written -> blit source. Swapchain image: acquired (the submission waits for the
   // acquire semaphore at the transfer stage, which this barrier's source scope chains to) -> blit
@@ -138,7 +192,7 @@ void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, vk::Image target,
       vk::ImageMemoryBarrier(Access::eShaderWrite, Access::eTransferRead, Layout::eGeneral, Layout::eTransferSrcOptimal,
                              VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *display_.image, kColorRange),
       vk::ImageMemoryBarrier({}, Access::eTransferWrite, Layout::eUndefined, Layout::eTransferDstOptimal,
-                             VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, target, kColorRange)};
+                             VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, target.image, kColorRange)};
   cmd.pipelineBarrier(Stage::eComputeShader | Stage::eTransfer, Stage::eTransfer, {}, {}, {}, toBlit);
 
   vk::ImageSubresourceLayers layers(vk::ImageAspectFlagBits::eColor, 0, 0, 1);
@@ -149,7 +203,7 @@ void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, vk::Image target,
                        {vk::Offset3D(0, 0, 0), vk::Offset3D(static_cast<std::int32_t>(targetExtent.width),
                                                             static_cast<std::int32_t>(targetExtent.height), 1)});
   bool scaled = size_ != targetExtent;
-  cmd.blitImage(*display_.image, Layout::eTransferSrcOptimal, target, Layout::eTransferDstOptimal, region,
+  cmd.blitImage(*display_.image, Layout::eTransferSrcOptimal, target.image, Layout::eTransferDstOptimal, region,
                 scaled ? vk::Filter::eLinear : vk::Filter::eNearest);
 }
 

@@ -84,6 +84,13 @@ bool Swapchain::recreate(vk::Extent2D framebuffer) {
     readable_ = static_cast<bool>(caps.supportedUsageFlags & vk::ImageUsageFlagBits::eTransferSrc);
     vk::ImageUsageFlags usage = vk::ImageUsageFlagBits::eColorAttachment | vk::ImageUsageFlagBits::eTransferDst;
     if (readable_) usage |= vk::ImageUsageFlagBits::eTransferSrc;
+    // Storage where the surface, the format and the device allow it: the resolve pass then writes
+    // the image itself. Not for an sRGB format: a shader's store does not encode (the blit does).
+    auto formatFeatures = pd.getFormatProperties(format_.format).optimalTilingFeatures;
+    storable_ = !isSrgbFormat_ && static_cast<bool>(caps.supportedUsageFlags & vk::ImageUsageFlagBits::eStorage) &&
+                static_cast<bool>(formatFeatures & vk::FormatFeatureFlagBits::eStorageImage) &&
+                context_.storageWriteWithoutFormatEnabled();
+    if (storable_) usage |= vk::ImageUsageFlagBits::eStorage;
     vk::SwapchainCreateInfoKHR info({}, *surface_, count, format_.format, format_.colorSpace, extent, 1, usage,
                                     vk::SharingMode::eExclusive, {}, caps.currentTransform,
                                     vk::CompositeAlphaFlagBitsKHR::eOpaque, presentMode_, VK_TRUE, *swapchain_);

@@ -39,6 +39,9 @@ public:
   vk::Semaphore renderFinished(std::uint32_t i) const { return *renderFinished_[i]; }
   // The images can be copied from (window screenshots).
   bool readable() const { return readable_; }
+  // The images are storage images a shader can write without naming their format: the resolve pass
+  // writes them directly, with no intermediate image and blit (presenter.h).
+  bool storable() const { return storable_; }
 
 private:
   const vulkan::Context& context_;
@@ -47,6 +50,7 @@ private:
   vk::SurfaceFormatKHR format_;
   bool isSrgbFormat_ = false;
   bool readable_ = false;
+  bool storable_ = false;
   vk::PresentModeKHR presentMode_ = vk::PresentModeKHR::eFifo;
   vk::Extent2D extent_;
   vk::raii::SwapchainKHR swapchain_{nullptr};

@@ -88,7 +88,8 @@ public:
             SceneWatcher& watcher, Scene scene)
       : o_(options), window_(window), context_(context), watcher_(watcher), scene_(std::move(scene)),
         swapchain_(context, window.createSurface(context.instance()), options.vsync), renderer_(context, cache),
-        presenter_(context, cache, swapchain_.encodeInShader()), frames_(context), camera_(scene_.camera) {
+        presenter_(context, cache, swapchain_.encodeInShader(), options.directResolve), frames_(context),
+        camera_(scene_.camera) {
     settings_.render = scene_.render;
     settings_.samplesPerFrame = options.samplesPerFrame.value_or(1);
     settings_.maxSamples = options.maxSamples;
@@ -102,6 +103,7 @@ public:
     }
     lastFramebuffer_ = window.framebufferSize();
     if (!swapchain_.recreate(lastFramebuffer_)) swapchainStale_ = true;
+    presenter_.attach(swapchain_);
     overlay_ = std::make_unique<Overlay>(context, window, swapchain_);
     overlay_->visible = options.overlay;
   }
@@ -153,6 +155,7 @@ private:
   vk::Extent2D lastFramebuffer_{0, 0}; // the window size the swapchain was made for
   bool prepared_ = false;
   std::uint32_t tracedFrames_ = 0; // scripted: frames traced at the current render size
+  bool lastResolveDirect_ = false; // the last frame's resolve wrote the swapchain image (presenter.h)
   double minimizedMs_ = 0.0;       // time spent minimized, tracing nothing
   bool resizeRequested_ = false;
   Clock::time_point resizeRequestedAt_{};
@@ -185,9 +188,13 @@ void FrameLoop::recreateSwapchain(vk::Extent2D framebuffer) {
   // The overlay's framebuffers name the old image views: gone first. Presentation may still hold the
   // old images; re-creation with oldSwapchain hands them over.
   overlay_->detach();
+  presenter_.detach();
   swapchainStale_ = !swapchain_.recreate(framebuffer);
   lastFramebuffer_ = framebuffer;
-  if (!swapchainStale_) overlay_->attach(swapchain_);
+  if (!swapchainStale_) {
+    overlay_->attach(swapchain_);
+    presenter_.attach(swapchain_);
+  }
 }
 
 void FrameLoop::quiesce() {
@@ -338,9 +345,11 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
                         vk::PipelineStageFlagBits::eComputeShader, {}, previousFrame, {}, {});
     if (step.count > 0) renderer_.recordSamples(cmd, step.sampleBase, step.count, step.accumulate);
     frames_.stamp(cmd, FrameRing::kTraced, vk::PipelineStageFlagBits::eComputeShader);
-    presenter_.recordResolve(cmd);
+    const Presenter::Target target{imageIndex, swapchain_.image(imageIndex), swapchain_.extent()};
+    lastResolveDirect_ = presenter_.direct(target);
+    presenter_.recordResolve(cmd, target);
     frames_.stamp(cmd, FrameRing::kResolved, vk::PipelineStageFlagBits::eComputeShader);
-    presenter_.recordBlit(cmd, swapchain_.image(imageIndex), swapchain_.extent());
+    presenter_.recordBlit(cmd, target);
     frames_.stamp(cmd, FrameRing::kBlitted, vk::PipelineStageFlagBits::eTransfer);
     overlay_->record(cmd, imageIndex);
     frames_.stamp(cmd, FrameRing::kDone, vk::PipelineStageFlagBits::eBottomOfPipe);
@@ -461,6 +470,7 @@ ViewerSummary FrameLoop::summarize() const {
   v.minimizedMs = minimizedMs_;
   v.device = context_.info().name;
   v.presentMode = presentModeName(swapchain_.presentMode());
+  v.resolvePath = lastResolveDirect_ ? "direct" : "blit";
   v.renderWidth = presenter_.size().width;
   v.renderHeight = presenter_.size().height;
   v.windowWidth = swapchain_.extent().width;
@@ -611,6 +621,7 @@ int FrameLoop::run() {
 void printViewerSummary(const ViewerSummary& v) {
   std::printf("device: %s\n", v.device.c_str());
   std::printf("present mode: %s\n", v.presentMode.c_str());
+  std::printf("resolve path: %s\n", v.resolvePath.c_str());
   std::printf("render size: %ux%u\n", v.renderWidth, v.renderHeight);
   std::printf("window size: %ux%u\n", v.windowWidth, v.windowHeight);
   std::printf("frames timed: %u\n", v.frames);

@@ -18,13 +18,14 @@ namespace vkray {
 struct ViewerSummary {
   std::string device;
   std::string presentMode;
+  std::string resolvePath; // "direct" (into the swapchain image) or "blit", as of the last frame
   std::uint32_t renderWidth = 0, renderHeight = 0;
   std::uint32_t windowWidth = 0, windowHeight = 0;
   std::uint32_t frames = 0; // frames timed
   double frameMs = 0.0;     // wall time between frames
   double traceMs = 0.0;     // GPU (timestamps): the Renderer's dispatch
   double resolveMs = 0.0;   // GPU: sums copied to an image and resolved to display colour
-  double blitMs = 0.0;      // GPU: blit to the swapchain image
+  double blitMs = 0.0;      // GPU: blit to the swapchain image (a layout transition on the direct path)
   double overlayMs = 0.0;   // GPU: the overlay's render pass
   double presentMs = 0.0;   // CPU: in acquire and present (on lavapipe this includes waiting for the GPU)
   double hostMs = 0.0;      // CPU: the frame loop itself (input, overlay UI, recording, submission)
@@ -51,6 +52,7 @@ struct ViewerOptions {
   bool specialize = true;
 
   bool vsync = true;
+  bool directResolve = true;                // the resolve pass writes the swapchain image where it can (presenter.h)
   std::optional<std::uint32_t> windowWidth; // default: the scene's image size
   std::optional<std::uint32_t> windowHeight;
   double renderScale = 1.0;          // render resolution relative to the window

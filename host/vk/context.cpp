@@ -74,6 +74,7 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
   info.apiVersion = props.apiVersion;
   info.shaderFloat64 = pd.getFeatures().shaderFloat64 == VK_TRUE;
+  info.storageImageWriteWithoutFormat = pd.getFeatures().shaderStorageImageWriteWithoutFormat == VK_TRUE;
   info.timestamps = props.limits.timestampComputeAndGraphics == VK_TRUE;
   info.maxStorageBufferRange = props.limits.maxStorageBufferRange;
   info.maxTexelBufferElements = props.limits.maxTexelBufferElements;
@@ -250,6 +251,8 @@ Context::Context(const ContextOptions& options) : log_(std::make_unique<Validati
   // Double precision is used only by the float64 reference kernel, where the device has it.
   float64Enabled_ = info_.shaderFloat64;
   features.shaderFloat64 = float64Enabled_ ? VK_TRUE : VK_FALSE;
+  // The viewer's resolve pass writes the swapchain image (any format) directly where this exists.
+  features.shaderStorageImageWriteWithoutFormat = info_.storageImageWriteWithoutFormat ? VK_TRUE : VK_FALSE;
   std::vector<const char*> extensions;
   for (const auto& e : options.deviceExtensions) extensions.push_back(e.c_str());
   vk::DeviceCreateInfo deviceInfo({}, queueInfo, {}, extensions, &features);

@@ -33,6 +33,7 @@ struct DeviceInfo {
   std::string driver; // driver name and version as the driver reports it
   std::uint32_t apiVersion = 0;
   bool shaderFloat64 = false;
+  bool storageImageWriteWithoutFormat = false; // imageStore to an image declared without a format
   bool timestamps = false;
   std::uint64_t maxStorageBufferRange = 0;
   std::uint64_t maxTexelBufferElements = 0;
@@ -71,6 +72,8 @@ public:
   const vk::raii::CommandPool& commandPool() const { return commandPool_; }
   const DeviceInfo& info() const { return info_; }
   bool float64Enabled() const { return float64Enabled_; }
+  // Shaders may write storage images declared without a format (the viewer's swapchain images).
+  bool storageWriteWithoutFormatEnabled() const { return info_.storageImageWriteWithoutFormat; }
   double timestampPeriodNs() const { return timestampPeriodNs_; }
   std::uint32_t timestampValidBits() const { return timestampValidBits_; }
   bool validationEnabled() const { return validation_; }
