@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -327,6 +328,38 @@ TEST_F(Viewer, ScreenshotAfterNFramesEqualsTheHeadlessRenderAtNSppBitForBit) {
   Image viewed = view(scene("showcase.json"), size + " --frames 4 --spp 1", "view.pfm");
   Image headless = render(scene("showcase.json"), size + " --spp 4 --stats", "render.pfm");
   expectBitIdentical(viewed, headless);
+}
+
+// A `name: value` line of --stats output, as a number (NaN when absent).
+double statValue(const std::string& out, const std::string& name) {
+  auto at = out.find("\n" + name + ": ");
+  if (at == std::string::npos) return std::nan("");
+  return std::stod(out.substr(at + name.size() + 3));
+}
+
+// The viewer counts rays in a sample of its frames (the first traced frame of each half-second
+// interval and every 8th one) through the counting pipeline, and traces the others with the same
+// kernel built without counters. Its "rays per frame" is the counted frames' average, and must
+// match a headless render's rays per sample within 1 %: frames differ only in where each pixel's
+// jittered sample falls, which moved 0.07 % of the rays at this size. Dividing by every frame
+// instead of the counted ones, or counting a frame twice or not at all, is off by 12 % or more.
+TEST_F(Viewer, RayCountsFromASampleOfTheFramesMatchTheHeadlessCounts) {
+  const std::string size = " --width 96 --height 72";
+  RunResult v = vkray("view '" + scene("showcase.json") + "'" + size + " --frames 40 --stats --validate");
+  ASSERT_EQ(v.exitCode, 0) << v.err;
+  EXPECT_EQ(v.err, "");
+  const double timed = statValue(v.out, "frames timed");
+  const double counted = statValue(v.out, "ray-counted frames");
+  const double perFrame = statValue(v.out, "rays per frame");
+  EXPECT_GE(counted, 1.0) << v.out;
+  EXPECT_LT(counted, timed) << "every frame paid for counting\n" << v.out;
+
+  fs::path out = dir_ / "counts.png";
+  RunResult h = vkray("render '" + scene("showcase.json") + "' -o '" + out.string() + "'" + size +
+                      " --spp 40 --stats --validate");
+  ASSERT_EQ(h.exitCode, 0) << h.err;
+  const double perSample = statValue(h.out, "rays") / 40.0;
+  EXPECT_NEAR(perFrame, perSample, 0.01 * perSample) << v.out << h.out;
 }
 
 TEST_F(Viewer, PngScreenshotOfAGlassSceneEqualsTheHeadlessPng) {

@@ -519,6 +519,10 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   samplePipeline_ = &pipelineFor(options.kernel, settings.precision,
                                  specializationFor(current_, settings, options, center, false), reused);
   lastPipelineMs_ = reused ? 0.0 : samplePipeline_->creationMs();
+  RenderOptions quiet = options;
+  quiet.countStats = false;
+  quietSampleKey_ = {options.kernel, settings.precision, specializationFor(current_, settings, quiet, center, false)};
+  quietSamplePipeline_ = options.countStats ? nullptr : samplePipeline_;
   refinePipeline_ = nullptr;
   if (adaptive) {
     refinePipeline_ = &pipelineFor(options.kernel, settings.precision,
@@ -542,7 +546,7 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
 }
 
 void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count,
-                             bool accumulate) {
+                             bool accumulate, bool countRays) {
   if (imageRows_ < frameHeight_) throw Error("the image does not fit one window; use render() instead");
   gpu::PushConstants push{};
   push.tileOrigin = glm::uvec2(0, 0);
@@ -551,7 +555,12 @@ void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t s
   push.sampleBase = sampleBase;
   push.sampleCount = count;
   push.flags = accumulate ? gpu::kFlagAccumulate : 0u;
-  recordDispatch(cmd, *samplePipeline_, push, false);
+  if (!countRays && quietSamplePipeline_ == nullptr) {
+    bool reused = false;
+    const auto& [kernel, precision, spec] = quietSampleKey_;
+    quietSamplePipeline_ = &pipelineFor(kernel, precision, spec, reused);
+  }
+  recordDispatch(cmd, countRays ? *samplePipeline_ : *quietSamplePipeline_, push, false);
 }
 
 vk::Buffer Renderer::imageBuffer() const {

@@ -219,7 +219,9 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
     ImGui::Checkbox("refraction", &settings.effects.refraction);
     ImGui::SameLine();
     ImGui::Checkbox("checker", &settings.effects.checker);
-    ImGui::Checkbox("count rays (costs ~10 %)", &settings.countStats);
+    ImGui::Checkbox("count rays", &settings.countStats);
+    ImGui::SameLine();
+    ImGui::TextDisabled("(in 1 frame of %u)", kRayCountEvery);
   }
   if (ImGui::CollapsingHeader("Camera", ImGuiTreeNodeFlags_DefaultOpen)) {
     bool fly = m.cameraMode == CameraMode::Fly;

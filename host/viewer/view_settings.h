@@ -19,12 +19,16 @@ struct EffectToggles {
   bool operator==(const EffectToggles&) const = default;
 };
 
+// With ray counting on, the viewer counts in one frame of this many (and the first of each stats
+// interval): a counted frame costs 10-20 % more on lavapipe (viewer.cpp, countsRays).
+constexpr std::uint32_t kRayCountEvery = 8;
+
 struct ViewSettings {
   RenderSettings render;           // accuracy knobs; width and height follow the window
   EffectToggles effects;           //
   int samplesPerFrame = 1;         // samples per pixel added by each frame
   std::uint32_t maxSamples = 4096; // accumulation stops here (the image has converged enough)
-  bool countStats = true;          // ray counters on (they cost about 20 % on lavapipe)
+  bool countStats = true;          // ray counters on, in 1 frame of kRayCountEvery (viewer.cpp)
   double renderScale = 1.0;        // render resolution relative to the window (blit scales up)
   double motionScale = 1.0;        // further scale while the camera moves (interactive frame rates)
 };

@@ -120,7 +120,9 @@ private:
   void quiesce();
   void collectStats();
   void publishStats(bool force);
-  void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex, bool captureWindow);
+  void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex, bool captureWindow,
+                   bool countRays);
+  bool countsRays(const Accumulation::Step& step) const;
   bool finishesScript(const Accumulation::Step& step) const;
   void prepareWindowCapture();
   void saveWindowScreenshot(const std::filesystem::path& path);
@@ -168,6 +170,10 @@ private:
   FrameTimes shown_;
   FrameTimes total_;
   std::uint64_t totalRays_ = 0;
+  // Rays are counted in a sample of the frames (countsRays): those in the interval and in total.
+  std::uint32_t countedInInterval_ = 0;
+  std::uint64_t totalCounted_ = 0;
+  std::uint32_t framesSinceCount_ = 0;
   Clock::time_point statsTaken_ = Clock::now();
   RayStats raysPerFrame_;
   double raysPerSecond_ = 0.0;
@@ -299,7 +305,7 @@ void FrameLoop::publishStats(bool force) {
   if (!force && msBetween(statsTaken_, now) < 500.0) return;
   quiesce();
   collectStats();
-  const std::uint32_t n = interval_.gpuFrames;
+  const std::uint32_t n = countedInInterval_;
   if (n > 0) {
     const RayStats& s = intervalRays_;
     raysPerFrame_ = RayStats();
@@ -310,7 +316,9 @@ void FrameLoop::publishStats(bool force) {
     raysPerFrame_.bailoutSaved = s.bailoutSaved / n;
     raysPerFrame_.stackOverflow = s.stackOverflow / n;
     raysPerFrame_.maxDepth = s.maxDepth;
-    raysPerSecond_ = interval_.gpu.trace > 0.0 ? static_cast<double>(s.total()) / (interval_.gpu.trace * 1e-3) : 0.0;
+    // The counted frames' rays per frame, over the interval's average trace time.
+    const double traceMs = interval_.per(interval_.gpu.trace, interval_.gpuFrames);
+    raysPerSecond_ = traceMs > 0.0 ? static_cast<double>(s.total()) / n / (traceMs * 1e-3) : 0.0;
   }
   if (interval_.frames > 0) shown_ = interval_;
   total_.wallMs += interval_.wallMs;
@@ -320,8 +328,10 @@ void FrameLoop::publishStats(bool force) {
   total_.frames += interval_.frames;
   total_.add({interval_.gpu, interval_.gpuFrames});
   totalRays_ += intervalRays_.total();
+  totalCounted_ += countedInInterval_;
   interval_ = FrameTimes();
   intervalRays_ = RayStats();
+  countedInInterval_ = 0;
   statsTaken_ = now;
   char title[256];
   double frameMs = shown_.per(shown_.wallMs, shown_.frames);
@@ -331,7 +341,7 @@ void FrameLoop::publishStats(bool force) {
 }
 
 void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex,
-                            bool captureWindow) {
+                            bool captureWindow, bool countRays) {
   const vk::raii::CommandBuffer& cmd = slot.cmd;
   vulkan::vulkanStep("recording a frame", [&] {
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
@@ -343,7 +353,7 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
                                     vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
     cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
                         vk::PipelineStageFlagBits::eComputeShader, {}, previousFrame, {}, {});
-    if (step.count > 0) renderer_.recordSamples(cmd, step.sampleBase, step.count, step.accumulate);
+    if (step.count > 0) renderer_.recordSamples(cmd, step.sampleBase, step.count, step.accumulate, countRays);
     frames_.stamp(cmd, FrameRing::kTraced, vk::PipelineStageFlagBits::eComputeShader);
     const Presenter::Target target{imageIndex, swapchain_.image(imageIndex), swapchain_.extent()};
     lastResolveDirect_ = presenter_.direct(target);
@@ -363,6 +373,15 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
                         vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, toHost, {}, {});
     cmd.end();
   });
+}
+
+// Counting rays costs 10-20 % of a trace on lavapipe (the counters' sums and atomics run lane by
+// lane), and the overlay shows averages twice a second. So with counting on, the first traced
+// frame of each interval and then every kRayCountEvery-th one count, through the counting
+// pipeline, and the others use the same kernel without counters; per-frame figures are averages
+// over the counted frames.
+bool FrameLoop::countsRays(const Accumulation::Step& step) const {
+  return settings_.countStats && step.count > 0 && (countedInInterval_ == 0 || framesSinceCount_ + 1 >= kRayCountEvery);
 }
 
 // Whether the frame about to be recorded is a scripted run's last (the loop's exit test, ahead of time).
@@ -485,9 +504,11 @@ ViewerSummary FrameLoop::summarize() const {
   v.hostMs = t.per(t.hostMs, t.frames);
   v.waitMs = t.per(t.waitMs, t.frames);
   v.rayCounts = settings_.countStats;
+  v.countedFrames = totalCounted_;
   if (v.rayCounts) {
-    v.raysPerFrame = t.gpuFrames > 0 ? static_cast<double>(totalRays_) / t.gpuFrames : 0.0;
-    v.mraysPerSecond = t.gpu.trace > 0 ? static_cast<double>(totalRays_) / (t.gpu.trace * 1e3) : 0.0;
+    v.raysPerFrame = totalCounted_ > 0 ? static_cast<double>(totalRays_) / static_cast<double>(totalCounted_) : 0.0;
+    const double traceMs = t.per(t.gpu.trace, t.gpuFrames);
+    v.mraysPerSecond = traceMs > 0 ? v.raysPerFrame / (traceMs * 1e3) : 0.0;
   }
   v.samples = accumulation_.samples();
   return v;
@@ -561,7 +582,14 @@ int FrameLoop::run() {
     Accumulation::Step step = accumulation_.next(settings_.samplesPerFrame, settings_.maxSamples);
     const bool captureWindow = !o_.windowScreenshot.empty() && finishesScript(step);
     if (captureWindow) prepareWindowCapture();
-    recordFrame(slot, step, *image, captureWindow);
+    const bool countRays = countsRays(step);
+    if (countRays) {
+      ++countedInInterval_;
+      framesSinceCount_ = 0;
+    } else if (step.count > 0) {
+      ++framesSinceCount_;
+    }
+    recordFrame(slot, step, *image, captureWindow, countRays);
     windowCaptured_ = windowCaptured_ || captureWindow;
     frames_.submit(swapchain_.renderFinished(*image));
     auto presentStart = Clock::now();
@@ -584,6 +612,7 @@ int FrameLoop::run() {
       publishStats(true);
       total_ = FrameTimes();
       totalRays_ = 0;
+      totalCounted_ = 0;
     }
 
     if (scripted()) {
@@ -638,6 +667,7 @@ void printViewerSummary(const ViewerSummary& v) {
   std::printf("host: %.2f ms\n", v.hostMs);
   std::printf("wait: %.2f ms\n", v.waitMs);
   if (v.rayCounts) {
+    std::printf("ray-counted frames: %llu\n", static_cast<unsigned long long>(v.countedFrames));
     std::printf("rays per frame: %.0f\n", v.raysPerFrame);
     std::printf("mrays/s: %.2f\n", v.mraysPerSecond);
   }

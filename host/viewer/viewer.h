@@ -31,6 +31,7 @@ struct ViewerSummary {
   double hostMs = 0.0;      // CPU: the frame loop itself (input, overlay UI, recording, submission)
   double waitMs = 0.0;      // CPU: blocked on frame fences
   bool rayCounts = false;
+  std::uint64_t countedFrames = 0; // frames traced with the ray counters (a sample of them, viewer.cpp)
   double raysPerFrame = 0.0;
   double mraysPerSecond = 0.0; // rays / trace time
   std::uint32_t samples = 0;   // samples per pixel at the end
