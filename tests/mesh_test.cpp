@@ -497,7 +497,9 @@ TEST(RenderMesh, ArraysBeyondTheTexelBufferLimitAreRefusedWithTheLimitNamed) {
 // ---- Command line --------------------------------------------------------------------------------
 
 // `render --stats` reports the BVH (build time, nodes, depth, bytes per triangle) and each mesh's
-// triangle and dropped-degenerate counts.
+// triangle and dropped-degenerate counts. Bytes per triangle counts what the kernel reads, as
+// `bench meshes` does: 48-byte triangles, the BVH, and three 16-byte shading normals for each of
+// smooth.obj's 2 triangles (the only ones with vertex normals).
 TEST(CliMesh, StatsReportTheBvhAndTheMeshes) {
   fs::path dir = fs::temp_directory_path() / ("vkray-cli-mesh-" + std::to_string(::getpid()));
   fs::create_directories(dir);
@@ -506,7 +508,9 @@ TEST(CliMesh, StatsReportTheBvhAndTheMeshes) {
     "objects": [ { "type": "mesh", "file": ")"
                        << (kMeshDir / "fan.obj").string() << R"(" },
                  { "type": "mesh", "file": ")"
-                       << (kMeshDir / "box.obj").string() << R"(" } ] })";
+                       << (kMeshDir / "box.obj").string() << R"(" },
+                 { "type": "mesh", "file": ")"
+                       << (kMeshDir / "smooth.obj").string() << R"(" } ] })";
   std::string cmd = std::string("VKRAY_DEVICE=llvmpipe '") + VKRAY_BINARY + "' render '" + scene.string() + "' -o '" +
                     (dir / "out.png").string() + "' --width 32 --height 24 --bvh on --stats -q >" +
                     (dir / "out.txt").string() + " 2>&1";
@@ -519,6 +523,13 @@ TEST(CliMesh, StatsReportTheBvhAndTheMeshes) {
         "fan.obj: 5 triangles, 2 degenerate dropped", "box.obj: 12 triangles, 0 degenerate dropped"}) {
     EXPECT_NE(out.find(line), std::string::npos) << "missing '" << line << "' in\n" << out;
   }
+  auto value = [&](const std::string& name) {
+    auto at = out.find(name);
+    return at == std::string::npos ? -1.0 : std::stod(out.substr(at + name.size()));
+  };
+  const double triangles = 5 + 12 + 2;
+  const double expected = (value("bvh bytes: ") + triangles * 48 + 2 * 3 * 16) / triangles;
+  EXPECT_NEAR(value("bytes per triangle: "), expected, 0.05) << out;
   fs::remove_all(dir);
 }
 
