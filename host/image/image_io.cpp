@@ -86,7 +86,11 @@ namespace {
 // between creating and renaming it (SIGKILL, power loss) leaves that hidden file behind; the next
 // write to NAME removes those whose PID no longer runs. A live writer's file is never touched.
 std::string temporaryPrefix(const fs::path& path) {
-  return "." + path.filename().string() + ".tmp-";
+  // Appended piece by piece: GCC 12 warns (-Wstringop-overflow, a false positive) on "." + string.
+  std::string prefix = ".";
+  prefix += path.filename().string();
+  prefix += ".tmp-";
+  return prefix;
 }
 
 void removeStaleTemporaries(const fs::path& dir, const fs::path& path) {
