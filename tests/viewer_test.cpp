@@ -524,6 +524,9 @@ VKRAY_DEVICE=llvmpipe VKRAY_CACHE_DIR=')" +
 vk=$!
 win=$(timeout 60 xdotool search --sync --onlyvisible --name '^vkray' | head -1)
 if [ -z "$win" ]; then kill $vk; echo "no window" >&2; exit 3; fi
+# The window is mapped before the first frame: wait for that frame (and the overlay's panel in it),
+# or a slow start (pipeline builds under the sanitizers) would see the wheel before the panel.
+for i in $(seq 600); do grep -q '^vkray: viewing' out && break; sleep 0.1; done
 xdotool windowfocus --sync "$win"
 xdotool mousemove --window "$win" 48 36
 sleep 1

@@ -519,10 +519,17 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   samplePipeline_ = &pipelineFor(options.kernel, settings.precision,
                                  specializationFor(current_, settings, options, center, false), reused);
   lastPipelineMs_ = reused ? 0.0 : samplePipeline_->creationMs();
-  RenderOptions quiet = options;
-  quiet.countStats = false;
-  quietSampleKey_ = {options.kernel, settings.precision, specializationFor(current_, settings, quiet, center, false)};
-  quietSamplePipeline_ = options.countStats ? nullptr : samplePipeline_;
+  quietSamplePipeline_ = samplePipeline_;
+  if (options.countStats && options.progressive) {
+    // The same pass without counters, for the frames the viewer does not count. Built here, with
+    // the other, rather than on first use: a pipeline build is a pause of up to a second on CPU
+    // devices, better before the first frame than after it.
+    RenderOptions quiet = options;
+    quiet.countStats = false;
+    quietSamplePipeline_ = &pipelineFor(options.kernel, settings.precision,
+                                        specializationFor(current_, settings, quiet, center, false), reused);
+    if (!reused) lastPipelineMs_ += quietSamplePipeline_->creationMs();
+  }
   refinePipeline_ = nullptr;
   if (adaptive) {
     refinePipeline_ = &pipelineFor(options.kernel, settings.precision,
@@ -555,11 +562,6 @@ void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t s
   push.sampleBase = sampleBase;
   push.sampleCount = count;
   push.flags = accumulate ? gpu::kFlagAccumulate : 0u;
-  if (!countRays && quietSamplePipeline_ == nullptr) {
-    bool reused = false;
-    const auto& [kernel, precision, spec] = quietSampleKey_;
-    quietSamplePipeline_ = &pipelineFor(kernel, precision, spec, reused);
-  }
   recordDispatch(cmd, countRays ? *samplePipeline_ : *quietSamplePipeline_, push, false);
 }
 

@@ -109,8 +109,9 @@ public:
   // Progressive use (the viewer). prepare() sizes the image buffer to hold the whole image, builds
   // or reuses the pipeline and updates the frame parameters; recordSamples() records one dispatch
   // adding `count` samples per pixel (sample indices base, base + 1, ...) to the image sums.
-  // countRays = false (with options.countStats) uses the same pipeline without the ray counters,
-  // built on first use: the viewer counts a sample of its frames, since counting costs 10-20 %.
+  // countRays = false uses the same pipeline without the ray counters (with options.countStats and
+  // progressive, prepare() builds both): the viewer counts a sample of its frames, since counting
+  // costs 10-20 %.
   void prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
   void recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count, bool accumulate,
                      bool countRays = true);
@@ -149,12 +150,9 @@ private:
   vk::raii::DescriptorSet descriptorSet_{nullptr};
   vk::raii::QueryPool queryPool_{nullptr};
   std::map<std::tuple<Kernel, Precision, vulkan::Specialization>, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
-  const vulkan::ComputePipeline* samplePipeline_ = nullptr; // pass kPassSample
-  // The sample pass without counters (recordSamples' countRays = false): its key, and the pipeline
-  // once built.
-  std::tuple<Kernel, Precision, vulkan::Specialization> quietSampleKey_;
-  const vulkan::ComputePipeline* quietSamplePipeline_ = nullptr;
-  const vulkan::ComputePipeline* refinePipeline_ = nullptr; // adaptive AA's refine pass
+  const vulkan::ComputePipeline* samplePipeline_ = nullptr;      // pass kPassSample
+  const vulkan::ComputePipeline* quietSamplePipeline_ = nullptr; // the same without counters
+  const vulkan::ComputePipeline* refinePipeline_ = nullptr;      // adaptive AA's refine pass
 
   GpuScene gpuScene_;
   Features features_; // scene facts; settings applied per render into current_
