@@ -337,10 +337,7 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
       build = std::min(build, g.bvh.stats.buildMs);
       row.nodes = g.bvh.stats.nodes;
       row.depth = g.bvh.stats.depth;
-      // What the kernel reads: triangles, shading normals and the BVH.
-      row.bytesPerTriangle = static_cast<double>(g.triangles.size() * sizeof(gpu::Triangle) +
-                                                 g.normals.size() * sizeof(glm::vec4) + g.bvhBytes()) /
-                             static_cast<double>(row.triangles);
+      row.bytesPerTriangle = static_cast<double>(g.meshBytes()) / static_cast<double>(row.triangles);
       if (pass == 0) {
         // The renderer's own kernel on the eye rays: one counted render (builds the pipeline), one
         // warm-up, then the timed runs.

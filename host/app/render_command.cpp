@@ -137,12 +137,10 @@ int runRender(const RenderArgs& args) {
       std::printf("bvh nodes: %zu\n", b.nodes);
       std::printf("bvh depth: %d\n", b.depth);
       const GpuScene& g = renderer.gpuScene();
-      std::size_t tris = g.triangles.size();
-      std::size_t bvhBytes = g.bvhBytes();
-      std::printf("bvh bytes: %zu\n", bvhBytes);
-      // What the kernel reads per triangle, as `bench meshes` counts it: triangles, shading normals, BVH.
-      std::size_t meshBytes = tris * sizeof(gpu::Triangle) + g.normals.size() * sizeof(glm::vec4) + bvhBytes;
-      if (tris > 0) std::printf("bytes per triangle: %.1f\n", static_cast<double>(meshBytes) / tris);
+      std::printf("bvh bytes: %zu\n", g.bvhBytes());
+      if (!g.triangles.empty()) {
+        std::printf("bytes per triangle: %.1f\n", static_cast<double>(g.meshBytes()) / g.triangles.size());
+      }
     }
     printStat("upload", renderer.uploadMs());
     printStat("pipeline", result.timings.pipelineMs);

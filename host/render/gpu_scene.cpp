@@ -96,6 +96,10 @@ std::size_t GpuScene::bvhBytes() const {
   return bvhNodes.size() * sizeof(gpu::BvhWideNode) + bvh.primRefs.size() * sizeof(std::uint32_t);
 }
 
+std::size_t GpuScene::meshBytes() const {
+  return triangles.size() * sizeof(gpu::Triangle) + normals.size() * sizeof(glm::vec4) + bvhBytes();
+}
+
 std::size_t GpuScene::bytes() const {
   return materials.size() * sizeof(gpu::Material) + lights.size() * sizeof(gpu::Light) +
          spheres.size() * sizeof(gpu::Sphere) + planes.size() * sizeof(gpu::Plane) +

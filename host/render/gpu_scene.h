@@ -34,6 +34,9 @@ struct GpuScene {
 
   std::size_t bytes() const;
   std::size_t bvhBytes() const; // what the kernel reads of the BVH: the records and the references
+  // What the kernel reads for the triangles: the triangles, their shading normals and the BVH
+  // (`render --stats` and `bench meshes` divide it by the triangle count).
+  std::size_t meshBytes() const;
 };
 
 // Packs the scene relative to `origin`; builds the BVH when withBvh. With a BVH, the primitive
