@@ -25,7 +25,8 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
                   "further resolution scale while the camera moves (default 0.5 on CPU devices, else 1)")
       ->check(CLI::IsMember({1.0, 0.5, 0.25}));
   cmd->add_flag("--no-overlay", a.noOverlay, "start with the overlay hidden (H shows it)");
-  cmd->add_flag("--no-ray-counts", a.noRayCounts, "start with the ray counters off (they cost about 20 %)");
+  cmd->add_flag("--no-ray-counts", a.noRayCounts,
+                "start with the ray counters off (on, they count one frame in 8, which costs 10-20 % more)");
   cmd->add_flag("--no-specialize", a.noSpecialize, "compile every feature in (for comparison)");
   cmd->add_flag("--no-direct-resolve", a.noDirectResolve,
                 "always resolve into an intermediate image and blit it, even where the window's images could "

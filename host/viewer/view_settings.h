@@ -20,7 +20,7 @@ struct EffectToggles {
 };
 
 // With ray counting on, the viewer counts in one frame of this many (and the first of each stats
-// interval): a counted frame costs 10-20 % more on lavapipe (viewer.cpp, countsRays).
+// interval): a counted frame costs 10-20 % more on lavapipe (viewer.cpp, takeCountTurn).
 constexpr std::uint32_t kRayCountEvery = 8;
 
 struct ViewSettings {

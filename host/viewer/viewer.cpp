@@ -122,7 +122,7 @@ private:
   void publishStats(bool force);
   void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex, bool captureWindow,
                    bool countRays);
-  bool countsRays(const Accumulation::Step& step) const;
+  bool takeCountTurn(const Accumulation::Step& step);
   bool finishesScript(const Accumulation::Step& step) const;
   void prepareWindowCapture();
   void saveWindowScreenshot(const std::filesystem::path& path);
@@ -170,7 +170,7 @@ private:
   FrameTimes shown_;
   FrameTimes total_;
   std::uint64_t totalRays_ = 0;
-  // Rays are counted in a sample of the frames (countsRays): those in the interval and in total.
+  // Rays are counted in a sample of the frames (takeCountTurn): those in the interval and in total.
   std::uint32_t countedInInterval_ = 0;
   std::uint64_t totalCounted_ = 0;
   std::uint32_t framesSinceCount_ = 0;
@@ -379,9 +379,17 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
 // lane), and the overlay shows averages twice a second. So with counting on, the first traced
 // frame of each interval and then every kRayCountEvery-th one count, through the counting
 // pipeline, and the others use the same kernel without counters; per-frame figures are averages
-// over the counted frames.
-bool FrameLoop::countsRays(const Accumulation::Step& step) const {
-  return settings_.countStats && step.count > 0 && (countedInInterval_ == 0 || framesSinceCount_ + 1 >= kRayCountEvery);
+// over the counted frames. Returns whether the frame about to be recorded counts, and books it.
+bool FrameLoop::takeCountTurn(const Accumulation::Step& step) {
+  if (step.count == 0) return false; // nothing traced
+  const bool counts = settings_.countStats && (countedInInterval_ == 0 || framesSinceCount_ + 1 >= kRayCountEvery);
+  if (counts) {
+    ++countedInInterval_;
+    framesSinceCount_ = 0;
+  } else {
+    ++framesSinceCount_;
+  }
+  return counts;
 }
 
 // Whether the frame about to be recorded is a scripted run's last (the loop's exit test, ahead of time).
@@ -582,14 +590,7 @@ int FrameLoop::run() {
     Accumulation::Step step = accumulation_.next(settings_.samplesPerFrame, settings_.maxSamples);
     const bool captureWindow = !o_.windowScreenshot.empty() && finishesScript(step);
     if (captureWindow) prepareWindowCapture();
-    const bool countRays = countsRays(step);
-    if (countRays) {
-      ++countedInInterval_;
-      framesSinceCount_ = 0;
-    } else if (step.count > 0) {
-      ++framesSinceCount_;
-    }
-    recordFrame(slot, step, *image, captureWindow, countRays);
+    recordFrame(slot, step, *image, captureWindow, takeCountTurn(step));
     windowCaptured_ = windowCaptured_ || captureWindow;
     frames_.submit(swapchain_.renderFinished(*image));
     auto presentStart = Clock::now();
