@@ -178,9 +178,14 @@ vec3 traceSample(uvec2 pixel, vec2 offset) {
 // Sum of `count` samples starting at `base` in the pixel's sequence.
 vec3 sampleSum(uvec2 pixel, uint pixelIndex, uint base, uint count, bool center) {
   vec3 sum = vec3(0.0);
-  for (uint k = 0u; k < count; ++k) {
+  if (count == 0u) return sum;
+  // Tested at the bottom (a `for` would run one more whole sample, masked off, on llvmpipe).
+  uint k = 0u;
+  while (true) {
     vec2 offset = (CENTER_SAMPLE || center) ? vec2(0.5) : sobolOwenSample(base + k, hashPcg(pixelIndex));
     sum += traceSample(pixel, offset);
+    ++k;
+    if (k >= count) break;
   }
   return sum;
 }

@@ -228,12 +228,16 @@ float intersectPolygonRobust(Ray ray, WatertightRay w, vec3 n, uint first, uint 
   vec2 prev = start;
   bool anyNeg = false;
   bool anyPos = false;
-  for (uint i = 1u; i < count; ++i) {
+  // Vertex loops are tested at the bottom (scene.glsl, traverseBvh: a loop tested at the top runs
+  // one more whole turn, masked off, on CPU drivers).
+  uint i = 1u;
+  while (count > 1u) {
     vec2 cur = shearVertex(VKRAY_POLYGON_VERTEX(first + i), ray, w).xy;
     float e = edgeFunction(prev, cur);
     anyNeg = anyNeg || e < 0.0;
     anyPos = anyPos || e > 0.0;
     prev = cur;
+    if (++i >= count) break;
   }
   float e = edgeFunction(prev, start);
   anyNeg = anyNeg || e < 0.0;
@@ -250,10 +254,12 @@ float intersectPolygonNaive(Ray ray, vec3 n, uint first, uint count, float tMax)
   if (t < 0.0) return -1.0;
   vec3 p = ray.origin + t * ray.dir;
   vec3 prev = v0;
-  for (uint i = 1u; i <= count; ++i) {
+  uint i = 1u;
+  while (count > 0u) {
     vec3 cur = VKRAY_POLYGON_VERTEX(first + (i % count));
     if (dot(n, cross(cur - prev, p - prev)) < 0.0) return -1.0;
     prev = cur;
+    if (++i > count) break;
   }
   return t;
 }

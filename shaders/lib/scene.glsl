@@ -366,42 +366,52 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
   uint stack[kBvhStackSize];
   int sp = 0;
   uint ref = opaqueUniform(frame.counts2.w); // the root
-  while (ref != kBvhNoRef) {
-    while (ref < kBvhLeafFlag) {
-      int base = int(4u * ref);
-      uvec4 a = imageLoad(nodeTexels, base);
-      uvec4 b = imageLoad(nodeTexels, base + 1);
-      uvec4 c = imageLoad(nodeTexels, base + 2);
-      uvec4 d = imageLoad(nodeTexels, base + 3);
-      float enter0 = boxEntry(r, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), hit.t);
-      float enter1 = boxEntry(r, uintBitsToFloat(c.xyz), uintBitsToFloat(d.xyz), hit.t);
-      uint ref0 = a.w;
-      uint ref1 = b.w;
-      bool in0 = !isinf(enter0);
-      bool in1 = !isinf(enter1);
-      // Branch-free step. The farther child is written to the free slot on top of the stack by
-      // every lane, and kept (sp advanced) only where both children are entered: a write under
-      // that condition would be a per-lane loop whose every lane tests the condition and
-      // mispredicts. The builder caps the depth at kBvhStackSize, so sp stays below it here.
-      bool firstNearer = enter0 <= enter1;
-      stack[sp] = firstNearer ? ref1 : ref0;
-      uint popped = stack[max(sp - 1, 0)];
-      bool neither = !in0 && !in1;
-      uint nearer = (in0 && (firstNearer || !in1)) ? ref0 : ref1; // the nearer child entered
-      ref = neither ? (sp > 0 ? popped : kBvhNoRef) : nearer;
-      sp += (in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0);
+  if (ref == kBvhNoRef) return; // an empty tree (the same for every invocation)
+  // Every loop here is tested at the bottom, with a `break` as its last statement: llvmpipe leaves
+  // a loop only at its back edge, so a loop tested at the top runs one more whole turn, every lane
+  // masked off, after its last lane is done (docs/performance.md, "Loops end at the bottom").
+  while (true) {
+    if (ref < kBvhLeafFlag) {
+      while (true) {
+        int base = int(4u * ref);
+        uvec4 a = imageLoad(nodeTexels, base);
+        uvec4 b = imageLoad(nodeTexels, base + 1);
+        uvec4 c = imageLoad(nodeTexels, base + 2);
+        uvec4 d = imageLoad(nodeTexels, base + 3);
+        float enter0 = boxEntry(r, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), hit.t);
+        float enter1 = boxEntry(r, uintBitsToFloat(c.xyz), uintBitsToFloat(d.xyz), hit.t);
+        uint ref0 = a.w;
+        uint ref1 = b.w;
+        bool in0 = !isinf(enter0);
+        bool in1 = !isinf(enter1);
+        // Branch-free step. The farther child is written to the free slot on top of the stack by
+        // every lane, and kept (sp advanced) only where both children are entered: a write under
+        // that condition would be a per-lane loop whose every lane tests the condition and
+        // mispredicts. The builder caps the depth at kBvhStackSize, so sp stays below it here.
+        bool firstNearer = enter0 <= enter1;
+        stack[sp] = firstNearer ? ref1 : ref0;
+        uint popped = stack[max(sp - 1, 0)];
+        bool neither = !in0 && !in1;
+        uint nearer = (in0 && (firstNearer || !in1)) ? ref0 : ref1; // the nearer child entered
+        ref = neither ? (sp > 0 ? popped : kBvhNoRef) : nearer;
+        sp += (in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0);
+        if (ref >= kBvhLeafFlag) break; // a leaf, or kBvhNoRef: the walk is over
+      }
     }
     if (ref == kBvhNoRef) break;
     uint entry = ref & kBvhLeafFirstMask;
-    uint end = entry + ((ref >> kBvhLeafCountShift) & 15u) + 1u;
-    for (; entry < end; ++entry) {
+    uint end = entry + ((ref >> kBvhLeafCountShift) & 15u) + 1u; // a leaf holds at least one
+    while (true) {
       uint kind;
       uint index;
       leafPrimitive(entry, kind, index);
       testPrimitive(r, kind, index, hit);
       if (anyHit && hit.kind != kNoHit) return;
+      ++entry;
+      if (entry >= end) break;
     }
     ref = sp > 0 ? stack[--sp] : kBvhNoRef;
+    if (ref == kBvhNoRef) break;
   }
 }
 
@@ -411,36 +421,47 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
 // planes the host proved cannot stand between a surface and a light (host/scene/features.cpp).
 Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay) {
   Hit hit = Hit(tMax, kNoHit, 0u, vec3(0.0));
-  if (HAS_PLANES) {
-    uint planes = shadowRay ? occluderPlaneCount() : planeCount();
-    for (uint i = 0u; i < planes; ++i) {
+  uint planes = HAS_PLANES ? (shadowRay ? occluderPlaneCount() : planeCount()) : 0u;
+  if (planes > 0u) {
+    uint i = 0u;
+    while (true) {
       float t = planeT(r, i, hit.t);
       if (t > 0.0) {
         hit = Hit(t, kPrimPlane, i, vec3(0.0));
         // (Before a BVH walk the return pays: the walk is a loop that a finished lane leaves.)
         if (anyHit && (USE_BVH || (shadowRay ? OCCLUDER_PLANE_COUNT : PLANE_COUNT) == kRuntimeCount)) return hit;
       }
+      if (++i >= planes) break;
     }
   }
   if (USE_BVH) {
     traverseBvh(r, hit, anyHit);
   } else {
-    if (HAS_SPHERES) {
-      for (uint i = 0u; i < sphereCount(); ++i) {
+    uint spheres = HAS_SPHERES ? sphereCount() : 0u;
+    if (spheres > 0u) {
+      uint i = 0u;
+      while (true) {
         testPrimitive(r, kPrimSphere, i, hit);
         if (anyHit && SPHERE_COUNT == kRuntimeCount && hit.kind != kNoHit) return hit;
+        if (++i >= spheres) break;
       }
     }
-    if (HAS_TRIANGLES) {
-      for (uint i = 0u; i < triangleCount(); ++i) {
+    uint triangles = HAS_TRIANGLES ? triangleCount() : 0u;
+    if (triangles > 0u) {
+      uint i = 0u;
+      while (true) {
         testPrimitive(r, kPrimTriangle, i, hit);
         if (anyHit && TRIANGLE_COUNT == kRuntimeCount && hit.kind != kNoHit) return hit;
+        if (++i >= triangles) break;
       }
     }
-    if (HAS_POLYGONS) {
-      for (uint i = 0u; i < polygonCount(); ++i) {
+    uint polygons = HAS_POLYGONS ? polygonCount() : 0u;
+    if (polygons > 0u) {
+      uint i = 0u;
+      while (true) {
         testPrimitive(r, kPrimPolygon, i, hit);
         if (anyHit && POLYGON_COUNT == kRuntimeCount && hit.kind != kNoHit) return hit;
+        if (++i >= polygons) break;
       }
     }
   }

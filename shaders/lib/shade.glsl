@@ -94,7 +94,8 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   vec3 o = origin;
   float travelled = 0.0; // along the shadow ray from the first origin
   float enteredAt = 0.0;
-  for (int crossing = 0; crossing < kMaxShadowCrossings; ++crossing) {
+  int crossing = 0;
+  while (true) { // tested at the bottom (see traverseBvh in scene.glsl)
     if (COUNT_STATS) gShadowRays++;
     TraceRay r = makeTraceRay(o, dir);
     float remaining = length(lightPos - o);
@@ -116,6 +117,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     vec3 next = ROBUST ? spawnOrigin(s.p, side, s.errorBound) : s.p;
     travelled += length(next - o);
     o = next;
+    if (++crossing >= kMaxShadowCrossings) break;
   }
   return transmit;
 }
