@@ -200,15 +200,20 @@ bool needsRefinement(uvec2 pixel) {
   uvec2 size = frame.imageSize.xy;
   vec3 c = clamp(averaged(prevPixel(pixel)), 0.0, 1.0);
   ivec2 offsets[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
+  // Selects, not `continue` or `return`: a loop the compiler cannot unroll costs one more whole
+  // turn, masked off, on CPU drivers. A neighbour outside the image, or outside the uploaded rows
+  // (never the case for the host's bands), is read clamped and does not count.
+  ivec2 lo = ivec2(0, int(pc.prevRow0));
+  ivec2 hi = max(ivec2(int(size.x), int(pc.prevRow0 + pc.prevRows)) - 1, lo);
+  bool refine = false;
   for (int i = 0; i < 4; ++i) {
     ivec2 q = ivec2(pixel) + offsets[i];
-    if (q.x < 0 || q.y < 0 || q.x >= int(size.x) || q.y >= int(size.y)) continue;
-    // Rows outside the uploaded window (never the case for the host's bands) are skipped.
-    if (uint(q.y) < pc.prevRow0 || uint(q.y) >= pc.prevRow0 + pc.prevRows) continue;
-    vec3 n = clamp(averaged(prevPixel(uvec2(q))), 0.0, 1.0);
-    if (maxComponent(abs(n - c)) > frame.knobs.y) return true;
+    bool counts = q.x >= 0 && q.y >= 0 && q.x < int(size.x) && q.y < int(size.y) &&
+                  uint(q.y) >= pc.prevRow0 && uint(q.y) < pc.prevRow0 + pc.prevRows;
+    vec3 n = clamp(averaged(prevPixel(uvec2(clamp(q, lo, hi)))), 0.0, 1.0);
+    refine = refine || (counts && maxComponent(abs(n - c)) > frame.knobs.y);
   }
-  return false;
+  return refine;
 }
 
 // One atomic per counter per subgroup: subgroupAdd sums the invocations' counters, one invocation

@@ -22,19 +22,27 @@ uvec2 mediaSetSlot(uvec2 m, uint i, uint id) {
   return m;
 }
 
+// The media helpers run a fixed number of turns with selects: on CPU drivers a loop whose trip count
+// the compiler cannot see (an early return, a data-dependent bound) stays a loop, and a loop costs
+// one more whole turn, masked off, than its lanes need (traverseBvh in scene.glsl).
+
 // The innermost medium, or kNoMedium outside everything.
 uint mediaTop(uvec2 m) {
-  for (int i = int(kMaxMediaDepth) - 1; i >= 0; --i) {
-    uint id = mediaSlot(m, uint(i));
-    if (id != kNoMedium) return id;
+  uint top = kNoMedium;
+  for (uint i = 0u; i < kMaxMediaDepth; ++i) {
+    uint id = mediaSlot(m, i);
+    top = id != kNoMedium ? id : top;
   }
-  return kNoMedium;
+  return top;
 }
 
 // Entering a medium; a full stack keeps its outer media (documented limit of kMaxMediaDepth).
 uvec2 mediaPush(uvec2 m, uint id) {
+  bool placed = false;
   for (uint i = 0u; i < kMaxMediaDepth; ++i) {
-    if (mediaSlot(m, i) == kNoMedium) return mediaSetSlot(m, i, id);
+    bool here = !placed && mediaSlot(m, i) == kNoMedium;
+    m = here ? mediaSetSlot(m, i, id) : m;
+    placed = placed || here;
   }
   return m;
 }
@@ -42,12 +50,13 @@ uvec2 mediaPush(uvec2 m, uint id) {
 // Leaving a medium: remove its innermost entry and close the gap.
 uvec2 mediaRemove(uvec2 m, uint id) {
   int found = -1;
-  for (int i = int(kMaxMediaDepth) - 1; i >= 0 && found < 0; --i) {
-    if (mediaSlot(m, uint(i)) == id) found = i;
+  for (uint i = 0u; i < kMaxMediaDepth; ++i) found = mediaSlot(m, i) == id ? int(i) : found;
+  uvec2 closed = m;
+  for (uint i = 0u; i + 1u < kMaxMediaDepth; ++i) {
+    closed = int(i) >= found ? mediaSetSlot(closed, i, mediaSlot(m, i + 1u)) : closed;
   }
-  if (found < 0) return m;
-  for (uint i = uint(found); i + 1u < kMaxMediaDepth; ++i) m = mediaSetSlot(m, i, mediaSlot(m, i + 1u));
-  return mediaSetSlot(m, kMaxMediaDepth - 1u, kNoMedium);
+  closed = mediaSetSlot(closed, kMaxMediaDepth - 1u, kNoMedium);
+  return found < 0 ? m : closed;
 }
 
 float mediumIor(uint id) { return id == kNoMedium ? 1.0 : loadMaterial(id).transmission.y; }
