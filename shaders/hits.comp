@@ -16,7 +16,7 @@ layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_siz
 #include "lib/offset.glsl"
 #include "lib/scene.glsl"
 
-layout(std430, binding = kBindingImage) writeonly buffer HitBuffer { vec4 hits[]; };
+layout(binding = kBindingImage, rgba32f) uniform writeonly restrict imageBuffer hitTexels; // one per pixel
 layout(std430, binding = kBindingStats) readonly buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 
@@ -46,5 +46,5 @@ void main() {
       }
     }
   }
-  hits[(pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x] = result;
+  imageStore(hitTexels, int((pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x), result);
 }

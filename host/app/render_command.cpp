@@ -181,9 +181,9 @@ int runInfo(const DeviceFlags& flags) {
                 VK_API_VERSION_PATCH(d.apiVersion));
     std::printf("  shaderFloat64: %s (float64 reference kernel)\n", d.shaderFloat64 ? "yes" : "no");
     std::printf("  timestamps: %s (GPU trace time)\n", d.timestamps ? "yes" : "no");
-    std::printf("  maxStorageBufferRange: %llu MiB (largest scene array / image band)\n",
+    std::printf("  maxStorageBufferRange: %llu MiB (largest sphere, plane, polygon or material array)\n",
                 static_cast<unsigned long long>(d.maxStorageBufferRange >> 20));
-    std::printf("  maxTexelBufferElements: %llu (texels of the triangle, normal and BVH arrays)\n",
+    std::printf("  maxTexelBufferElements: %llu (texels of the triangle, normal and BVH arrays; pixels per image band)\n",
                 static_cast<unsigned long long>(d.maxTexelBufferElements));
     std::printf("  maxMemoryAllocationSize: %llu MiB\n",
                 static_cast<unsigned long long>(d.maxMemoryAllocationSize >> 20));

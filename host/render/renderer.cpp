@@ -23,6 +23,8 @@ double msSince(Clock::time_point t) {
 
 // Bytes of image window the renderer allows itself: bands of rows are traced into it and read back.
 constexpr vk::DeviceSize kImageWindowBudget = 64ull << 20;
+// The image window and the refine pass's copy are texel buffers of (sum rgb, samples).
+constexpr vk::Format kImageTexelFormat = vk::Format::eR32G32B32A32Sfloat;
 
 bool isUniformBinding(std::uint32_t b) {
   return b == gpu::kBindingFrame || b == gpu::kBindingSceneUbo;
@@ -30,14 +32,21 @@ bool isUniformBinding(std::uint32_t b) {
 
 // The mesh-sized arrays are texel buffers (see shaders/lib/scene.glsl); BVH records and triangles,
 // the hottest, are storage texel buffers (imageLoad compiles inline on lavapipe), the others
-// uniform texel buffers.
+// uniform texel buffers. (The image and its refine-pass copy are storage texel buffers too, but
+// the renderer's own, not the scene's.)
 bool isTexelBinding(std::uint32_t b) {
   return b == gpu::kBindingTriangles || b == gpu::kBindingNormals || b == gpu::kBindingBvhNodes ||
          b == gpu::kBindingPrimRefs;
 }
 
+// Four storage texel buffers, the least maxPerStageDescriptorStorageImages a device may have.
+bool isStorageTexelBinding(std::uint32_t b) {
+  return b == gpu::kBindingBvhNodes || b == gpu::kBindingTriangles || b == gpu::kBindingImage ||
+         b == gpu::kBindingPrevImage;
+}
+
 vk::DescriptorType descriptorType(std::uint32_t b) {
-  if (b == gpu::kBindingBvhNodes || b == gpu::kBindingTriangles) return vk::DescriptorType::eStorageTexelBuffer;
+  if (isStorageTexelBinding(b)) return vk::DescriptorType::eStorageTexelBuffer;
   if (isTexelBinding(b)) return vk::DescriptorType::eUniformTexelBuffer;
   return isUniformBinding(b) ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer;
 }
@@ -91,7 +100,7 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, push));
     std::array<vk::DescriptorPoolSize, 4> sizes{
-        vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 2),
+        vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 4),
         vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
         vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount),
         vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, 4)};
@@ -112,7 +121,7 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
       vulkan::MemoryUse::Readback, "ray statistics");
   gpu::RayStats zero{};
   stats_->write(&zero, sizeof zero);
-  prevImage_ = std::make_unique<vulkan::Buffer>(context, 16, vk::BufferUsageFlagBits::eStorageBuffer,
+  prevImage_ = std::make_unique<vulkan::Buffer>(context, sizeof(glm::vec4), kImageTexelFormat,
                                                 vulkan::MemoryUse::DeviceLocal, "previous image (unused)");
   sceneBuffers_.resize(gpu::kBindingCount);
 }
@@ -249,15 +258,17 @@ void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool n
   bool rebuild = !image_ || imageWidth_ != width || imageRows_ != rows;
   if (rebuild) {
     vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width) * rows * sizeof(glm::vec4);
-    image_ = std::make_unique<vulkan::Buffer>(context_, bytes, vk::BufferUsageFlagBits::eStorageBuffer,
-                                              vulkan::MemoryUse::DeviceLocal, "image");
+    image_.reset(); // the old window's memory goes back first
+    image_ = std::make_unique<vulkan::Buffer>(context_, bytes, kImageTexelFormat, vulkan::MemoryUse::DeviceLocal, "image");
     imageWidth_ = width;
     imageRows_ = rows;
   }
   // The refine pass reads the band plus one row above and below.
-  vk::DeviceSize prevBytes = needPrev ? static_cast<vk::DeviceSize>(width) * (rows + 2) * sizeof(glm::vec4) : 16;
+  vk::DeviceSize prevBytes =
+      needPrev ? static_cast<vk::DeviceSize>(width) * (rows + 2) * sizeof(glm::vec4) : sizeof(glm::vec4);
   if (prevImage_->size() < prevBytes) {
-    prevImage_ = std::make_unique<vulkan::Buffer>(context_, prevBytes, vk::BufferUsageFlagBits::eStorageBuffer,
+    prevImage_.reset();
+    prevImage_ = std::make_unique<vulkan::Buffer>(context_, prevBytes, kImageTexelFormat,
                                                   vulkan::MemoryUse::DeviceLocal, "previous image");
     rebuild = true;
   }
@@ -269,6 +280,11 @@ void Renderer::updateDescriptors() {
   std::vector<vk::BufferView> views(gpu::kBindingCount);
   std::vector<vk::WriteDescriptorSet> writes;
   for (std::uint32_t b = 0; b < gpu::kBindingCount; ++b) {
+    if (b == gpu::kBindingImage || b == gpu::kBindingPrevImage) {
+      views[b] = (b == gpu::kBindingImage ? image_ : prevImage_)->texelView();
+      writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, nullptr, &views[b]);
+      continue;
+    }
     if (isTexelBinding(b)) {
       views[b] = sceneBuffers_[b]->texelView();
       writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, nullptr, &views[b]);
@@ -277,10 +293,6 @@ void Renderer::updateDescriptors() {
     vk::Buffer handle;
     if (b == gpu::kBindingFrame)
       handle = frameBuffer_->handle();
-    else if (b == gpu::kBindingImage)
-      handle = image_->handle();
-    else if (b == gpu::kBindingPrevImage)
-      handle = prevImage_->handle();
     else if (b == gpu::kBindingStats)
       handle = stats_->handle();
     else
@@ -538,14 +550,15 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   }
 
   std::uint64_t rowBytes = static_cast<std::uint64_t>(settings.width) * sizeof(glm::vec4);
-  std::uint64_t limit = std::min<std::uint64_t>(context_.info().maxStorageBufferRange, kImageWindowBudget);
+  std::uint64_t limit =
+      std::min<std::uint64_t>(context_.info().maxTexelBufferElements * sizeof(glm::vec4), kImageWindowBudget);
   std::uint64_t rowsFit = limit / rowBytes;
   // The refine pass's window holds two extra rows.
   if (adaptive && rowsFit > 2) rowsFit -= 2;
   if (rowsFit < 8 && rowsFit < settings.height) {
     throw InputError("image.width", "an image " + std::to_string(settings.width) + " pixels wide needs " +
                                         std::to_string(rowBytes * 8 >> 20) + " MiB per band of 8 rows, more than " +
-                                        context_.info().name + " binds in one storage buffer");
+                                        context_.info().name + " reads from one texel buffer (maxTexelBufferElements)");
   }
   auto rows = static_cast<std::uint32_t>(std::min<std::uint64_t>(rowsFit, settings.height));
   ensureImageWindow(settings.width, rows, adaptive);

@@ -37,9 +37,9 @@ VKRAY_CONST(uint, kBindingPolyVertices, 7u); // vec4[] polygon vertices (xyz)
 VKRAY_CONST(uint, kBindingNormals, 8u);      // texels: shading normals, 3 per smooth triangle
 VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // texels: BvhWideNode[] (4 RGBA32UI each)
 VKRAY_CONST(uint, kBindingPrimRefs, 10u);    // texels (R32UI): leaf references, kind << 30 | index
-VKRAY_CONST(uint, kBindingImage, 11u);       // vec4[] linear RGB, row-major, width * height
+VKRAY_CONST(uint, kBindingImage, 11u);       // texels (RGBA32F): sum of linear RGB, samples; row-major
 VKRAY_CONST(uint, kBindingStats, 12u);       // RayStats
-VKRAY_CONST(uint, kBindingPrevImage, 13u);   // vec4[] copy of the image read by the refine pass
+VKRAY_CONST(uint, kBindingPrevImage, 13u);   // texels (RGBA32F): the base image the refine pass reads
 // The same small arrays packed into one uniform buffer (kSpecSceneInUbo), see SceneUbo below.
 VKRAY_CONST(uint, kBindingSceneUbo, 14u);
 VKRAY_CONST(uint, kBindingCount, 15u);
