@@ -12,9 +12,10 @@ layout(local_size_x = kResolveGroupX, local_size_y = kResolveGroupY, local_size_
 
 layout(constant_id = kResolveSpecEncodeSrgb) const bool ENCODE_SRGB = true;
 
-// The sums arrive as an image copied from the Renderer's buffer: on lavapipe a texel fetch is one
-// vector gather, a storage-buffer read a per-lane loop (it was 80 % of this pass's time).
-layout(binding = kResolveBindingSums) uniform sampler2D sums;
+// The Renderer's sums, read where they are: a storage texel buffer, which lavapipe reads with one
+// 16-byte load per lane inline (a storage-buffer read would be a per-lane loop per component, once
+// 80 % of this pass's time; copying them into a sampled image cost about 1 ms a frame).
+layout(binding = kResolveBindingSums, rgba32f) uniform readonly restrict imageBuffer sums;
 #ifdef VKRAY_RESOLVE_DIRECT
 // The swapchain image: no format named (shaderStorageImageWriteWithoutFormat), so one pipeline
 // writes BGRA and RGBA images alike; the store rounds to 8 bits.
@@ -40,7 +41,7 @@ void main() {
   ivec2 size = imageSize(display);
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(pixel, size))) return;
-  vec4 s = texelFetch(sums, pixel, 0);
+  vec4 s = imageLoad(sums, pixel.y * size.x + pixel.x); // row-major, as wide as the image written
   vec3 rgb = s.rgb / max(s.w, 1.0); // a pixel not traced yet (w = 0) has a zero sum: black
   rgb = ENCODE_SRGB ? linearToSrgb(rgb) : clamp(rgb, 0.0, 1.0);
   imageStore(display, pixel, vec4(rgb, 1.0));

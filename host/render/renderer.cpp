@@ -582,6 +582,10 @@ vk::Buffer Renderer::imageBuffer() const {
   return image_ ? image_->handle() : vk::Buffer();
 }
 
+vk::BufferView Renderer::imageTexelView() const {
+  return image_ ? image_->texelView() : vk::BufferView();
+}
+
 Image Renderer::readImage() const {
   Image img(frameWidth_, frameHeight_);
   std::vector<glm::vec4> sums(static_cast<std::size_t>(frameWidth_) * frameHeight_);

@@ -115,7 +115,8 @@ public:
   void prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
   void recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count, bool accumulate,
                      bool countRays = true);
-  vk::Buffer imageBuffer() const; // vec4(sum rgb, samples) per pixel, row-major
+  vk::Buffer imageBuffer() const;         // vec4(sum rgb, samples) per pixel, row-major
+  vk::BufferView imageTexelView() const;  // the same as RGBA32F texels (a storage texel buffer)
   Image readImage() const;        // averages of the sums (after the recorded work completed)
   RayStats takeStats();           // reads and zeroes the counters
   const Features& currentFeatures() const { return current_; }

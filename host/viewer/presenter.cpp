@@ -14,7 +14,6 @@ namespace vkray {
 namespace {
 
 constexpr vk::Format kDisplayFormat = vk::Format::eR16G16B16A16Sfloat; // see resolve.comp
-constexpr vk::Format kSumsFormat = vk::Format::eR32G32B32A32Sfloat;    // the Renderer's vec4 per pixel
 const vk::ImageSubresourceRange kColorRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
 
 std::uint32_t deviceLocalType(const vulkan::Context& context, std::uint32_t typeBits) {
@@ -34,22 +33,19 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
   const auto& device = context.device();
   vulkan::vulkanStep("creating the viewer's resolve pass", [&] {
     std::array<vk::DescriptorSetLayoutBinding, 2> bindings{
-        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingSums, vk::DescriptorType::eCombinedImageSampler, 1,
+        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingSums, vk::DescriptorType::eStorageTexelBuffer, 1,
                                        vk::ShaderStageFlagBits::eCompute),
         vk::DescriptorSetLayoutBinding(gpu::kResolveBindingDisplay, vk::DescriptorType::eStorageImage, 1,
                                        vk::ShaderStageFlagBits::eCompute)};
     setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, {}));
-    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 1),
+    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 1),
                                                 vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 1)};
     pool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
     vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*pool_, layouts));
     set_ = std::move(sets.front());
-    // texelFetch ignores filtering; a sampler is still part of a combined image sampler.
-    sampler_ = vk::raii::Sampler(
-        device, vk::SamplerCreateInfo({}, vk::Filter::eNearest, vk::Filter::eNearest, vk::SamplerMipmapMode::eNearest));
   });
   vulkan::Specialization spec;
   spec.set(gpu::kResolveSpecEncodeSrgb, encodeSrgb);
@@ -69,7 +65,7 @@ void Presenter::attach(const Swapchain& swapchain) {
   const auto& device = context_.device();
   vulkan::vulkanStep("creating the viewer's direct resolve sets", [&] {
     const auto n = static_cast<std::uint32_t>(swapchain.imageCount());
-    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, n),
+    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, n),
                                                 vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, n)};
     directPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, n, sizes));
@@ -82,7 +78,7 @@ void Presenter::attach(const Swapchain& swapchain) {
       device.updateDescriptorSets(write, {});
     }
   });
-  if (*sumsCopy_.view) writeSums();
+  if (sumsView_) writeSums();
 }
 
 void Presenter::detach() {
@@ -91,11 +87,12 @@ void Presenter::detach() {
 }
 
 void Presenter::writeSums() {
-  vk::DescriptorImageInfo sumsInfo(*sampler_, *sumsCopy_.view, vk::ImageLayout::eShaderReadOnlyOptimal);
   std::vector<vk::WriteDescriptorSet> writes;
-  writes.emplace_back(*set_, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eCombinedImageSampler, &sumsInfo);
+  writes.emplace_back(*set_, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr, nullptr,
+                      &sumsView_);
   for (const auto& set : directSets_) {
-    writes.emplace_back(*set, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eCombinedImageSampler, &sumsInfo);
+    writes.emplace_back(*set, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr,
+                        nullptr, &sumsView_);
   }
   context_.device().updateDescriptorSets(writes, {});
 }
@@ -115,13 +112,13 @@ Presenter::OwnedImage Presenter::makeImage(vk::Format format, vk::ImageUsageFlag
   return out;
 }
 
-void Presenter::bind(vk::Buffer sums, vk::Extent2D size) {
+void Presenter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size) {
   // Always rewritten: the Renderer may have replaced its buffer by one with the same handle value.
   vulkan::vulkanStep("sizing the viewer's display images", [&] {
+    sums_ = sums;
+    sumsView_ = sumsView;
     if (size != size_) {
       display_ = OwnedImage();
-      sumsCopy_ = OwnedImage();
-      sumsCopy_ = makeImage(kSumsFormat, vk::ImageUsageFlagBits::eTransferDst | vk::ImageUsageFlagBits::eSampled, size);
       display_ =
           makeImage(kDisplayFormat, vk::ImageUsageFlagBits::eStorage | vk::ImageUsageFlagBits::eTransferSrc, size);
     }
@@ -131,7 +128,6 @@ void Presenter::bind(vk::Buffer sums, vk::Extent2D size) {
     context_.device().updateDescriptorSets(write, {});
     writeSums();
   });
-  sums_ = sums;
   size_ = size;
 }
 
@@ -139,28 +135,17 @@ void Presenter::recordResolve(const vk::raii::CommandBuffer& cmd, const Target& 
   using Stage = vk::PipelineStageFlagBits;
   using Access = vk::AccessFlagBits;
   using Layout = vk::ImageLayout;
-  // The trace's sums -> copy source. The copy's destination was read by the previous frame's resolve
-  // (Stage::eComputeShader as the source scope orders that); its old contents are not needed.
-  vk::BufferMemoryBarrier sumsWritten(Access::eShaderWrite, Access::eTransferRead, VK_QUEUE_FAMILY_IGNORED,
-                                      VK_QUEUE_FAMILY_IGNORED, sums_, 0, VK_WHOLE_SIZE);
-  vk::ImageMemoryBarrier copyWritable({}, Access::eTransferWrite, Layout::eUndefined, Layout::eTransferDstOptimal,
-                                      VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED, *sumsCopy_.image, kColorRange);
-  cmd.pipelineBarrier(Stage::eComputeShader, Stage::eTransfer, {}, {}, sumsWritten, copyWritable);
-  vk::BufferImageCopy region(0, 0, 0, vk::ImageSubresourceLayers(vk::ImageAspectFlagBits::eColor, 0, 0, 1), {0, 0, 0},
-                             vk::Extent3D(size_.width, size_.height, 1));
-  cmd.copyBufferToImage(sums_, *sumsCopy_.image, Layout::eTransferDstOptimal, region);
-
-  // The copy -> texel fetches. The written image's old contents are not needed: the display image
-  // was read by the previous frame's blit, the swapchain image by presentation (the acquire
-  // semaphore, waited for at the transfer stage, chains to this barrier's source scope).
+  // The trace's writes to the sums -> the resolve's reads. The image written is the swapchain's
+  // (direct) or the display image; its old contents are not needed: the display image was read by
+  // the previous frame's blit, the swapchain image by presentation (the acquire semaphore, waited
+  // for at the transfer stage, chains to this barrier's source scope).
   const bool toSwapchain = direct(target);
-  std::array<vk::ImageMemoryBarrier, 2> toResolve{
-      vk::ImageMemoryBarrier(Access::eTransferWrite, Access::eShaderRead, Layout::eTransferDstOptimal,
-                             Layout::eShaderReadOnlyOptimal, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
-                             *sumsCopy_.image, kColorRange),
-      vk::ImageMemoryBarrier({}, Access::eShaderWrite, Layout::eUndefined, Layout::eGeneral, VK_QUEUE_FAMILY_IGNORED,
-                             VK_QUEUE_FAMILY_IGNORED, toSwapchain ? target.image : *display_.image, kColorRange)};
-  cmd.pipelineBarrier(Stage::eTransfer, Stage::eComputeShader, {}, {}, {}, toResolve);
+  vk::BufferMemoryBarrier sumsWritten(Access::eShaderWrite, Access::eShaderRead, VK_QUEUE_FAMILY_IGNORED,
+                                      VK_QUEUE_FAMILY_IGNORED, sums_, 0, VK_WHOLE_SIZE);
+  vk::ImageMemoryBarrier writable({}, Access::eShaderWrite, Layout::eUndefined, Layout::eGeneral,
+                                  VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                                  toSwapchain ? target.image : *display_.image, kColorRange);
+  cmd.pipelineBarrier(Stage::eComputeShader | Stage::eTransfer, Stage::eComputeShader, {}, {}, sumsWritten, writable);
 
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, (toSwapchain ? directPipeline_ : pipeline_)->handle());
   cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0,

@@ -1,5 +1,5 @@
-// Puts the Renderer's image on the swapchain: its per-pixel sums are copied into an image, and a
-// compute "resolve" pass (shaders/resolve.comp) turns them into display colour. Two paths:
+// Puts the Renderer's image on the swapchain: a compute "resolve" pass (shaders/resolve.comp) reads
+// its per-pixel sums, a storage texel buffer, and turns them into display colour. Two paths:
 // - direct: where the swapchain images are storage images (Swapchain::storable) and the render size
 //   is the window's, the pass writes the acquired swapchain image itself;
 // - blit: otherwise (a scaled render, or a device that cannot), it writes a half-float storage image,
@@ -24,9 +24,10 @@ public:
   // allowDirect: use the direct path where the swapchain allows it (off: always blit, to compare).
   Presenter(const vulkan::Context& context, vulkan::PipelineCache* cache, bool encodeSrgb, bool allowDirect = true);
 
-  // Points the resolve pass at the Renderer's image (width x height sums) and sizes the display
-  // image. Only while no recorded frame is pending: it rewrites the descriptor sets.
-  void bind(vk::Buffer sums, vk::Extent2D size);
+  // Points the resolve pass at the Renderer's image (width x height sums: the buffer, and its
+  // RGBA32F texel view) and sizes the display image. Only while no recorded frame is pending: it
+  // rewrites the descriptor sets.
+  void bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size);
   // Builds the direct path's descriptor sets for the swapchain's images (none when it is not
   // storable), and drops them before the swapchain is re-created. Only while no frame is pending.
   void attach(const Swapchain& swapchain);
@@ -40,8 +41,7 @@ public:
   };
   // Whether a frame on `target` takes the direct path.
   bool direct(const Target& target) const { return !directSets_.empty() && target.extent == size_; }
-  // Records the copy of the sums and the resolve pass, into the swapchain image (direct) or the
-  // display image. The trace's writes to the sums precede it in the command buffer; the submission
+  // Records the resolve pass, into the swapchain image (direct) or the display image. The trace's writes to the sums precede it in the command buffer; the submission
   // waits for the image's acquisition at the transfer stage, which this chains to.
   void recordResolve(const vk::raii::CommandBuffer& cmd, const Target& target) const;
   // Records the blit of the display image into the target (or, on the direct path, only the
@@ -73,12 +73,11 @@ private:
     vk::raii::ImageView view{nullptr};
   };
   OwnedImage makeImage(vk::Format format, vk::ImageUsageFlags usage, vk::Extent2D size) const;
-  void writeSums(); // the sums copy into every set
+  void writeSums(); // the sums' view into every set
 
-  vk::raii::Sampler sampler_{nullptr};
-  OwnedImage sumsCopy_; // the sums, copied from the Renderer's buffer for texel fetches
-  OwnedImage display_;  // resolved colour, the blit's source (blit path)
+  OwnedImage display_; // resolved colour, the blit's source (blit path)
   vk::Buffer sums_;
+  vk::BufferView sumsView_;
   vk::Extent2D size_{0, 0};
 };
 

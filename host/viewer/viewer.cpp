@@ -287,7 +287,7 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   options.specialize = o_.specialize;
   options.countStats = settings_.countStats;
   renderer_.prepare(camera_.camera(), r, options);
-  presenter_.bind(renderer_.imageBuffer(), size);
+  presenter_.bind(renderer_.imageBuffer(), renderer_.imageTexelView(), size);
   accumulation_.restart();
   // A scripted run's frames all belong to the final image: a new size or scene starts the count again.
   if (sizeChanged || sceneReloaded) tracedFrames_ = 0;
@@ -347,8 +347,8 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
     frames_.resetStamps(cmd);
     frames_.stamp(cmd, FrameRing::kStart, vk::PipelineStageFlagBits::eTopOfPipe);
-    // The previous frame's trace (which wrote the sums and counters) and its copy of the sums (which
-    // read them) come before this frame's trace adds to the same sums and counters.
+    // The previous frame's trace (which wrote the sums and counters) and its resolve (which read the
+    // sums) come before this frame's trace adds to the same sums and counters.
     vk::MemoryBarrier previousFrame(vk::AccessFlagBits::eShaderWrite,
                                     vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
     cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,

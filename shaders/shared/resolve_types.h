@@ -9,7 +9,7 @@
 namespace vkray::gpu {
 #endif
 
-VKRAY_CONST(uint, kResolveBindingSums, 0u);    // sampler2D: copy of the Renderer's (sum rgb, samples)
+VKRAY_CONST(uint, kResolveBindingSums, 0u);    // storage texel buffer: the Renderer's (sum rgb, samples)
 VKRAY_CONST(uint, kResolveBindingDisplay, 1u); // storage image: the swapchain image, or one blitted to it
 VKRAY_CONST(uint, kResolveSpecEncodeSrgb, 0u); // 1: write sRGB-encoded values (UNORM target)
 // Rows of 64: the pass does little per pixel, and on lavapipe each workgroup has a fixed cost
