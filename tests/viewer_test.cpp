@@ -272,25 +272,37 @@ TEST_F(Viewer, ScriptedRunExitsCleanlyUnderValidation) {
 
 // What the window shows is the Renderer's image: read back from the swapchain image after the overlay
 // (--screenshot-window) and compared with the Renderer's own screenshot of the same frame. Right of the
-// overlay's panel they agree to one 8-bit level: the resolve pass encodes sRGB with the GPU's pow and
-// the store (direct path) or the blit (from a half-float image) rounds that to 8 bits, while the PNG
-// writer encodes the float sums on the host; a swapped channel, a flipped row order or a
-// missing/double sRGB encoding would be off by far more. Under the panel the overlay was drawn on the
-// window, and not into the screenshot. Both resolve paths (presenter.h) are checked: lavapipe's
-// swapchain images are storage images, so the default is the direct one.
-void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& window) {
+// overlay's panel they agree to one 8-bit level, and nearly everywhere exactly: the resolve pass
+// encodes sRGB with a fit whose largest error is 0.008 of a level (shaders/resolve.comp) and the store
+// (direct path) or the blit (from a half-float image) rounds that to 8 bits, while the PNG writer
+// encodes the float sums exactly on the host. Values within 0.008 levels of a rounding boundary may
+// round the other way: at most 1.6 % of evenly spread values, so on the direct path at most 2 % may
+// differ. The blit path's half floats add up to half their spacing, 0.062 levels below 1, before the
+// blit rounds: at most 14 % of values, so 15 % (2.6 % are seen on the showcase). A swapped channel,
+// a flipped row order or a missing/double sRGB encoding would be off by far more. Under the panel the overlay was drawn
+// on the window, and not into the screenshot. Both resolve paths (presenter.h) are checked: lavapipe's swapchain images
+// are storage images, so the default is the direct one.
+void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& window, double maxDifferentShare) {
   Image a = readImage(shot);
   Image b = readImage(window);
   ASSERT_EQ(a.width, b.width);
   ASSERT_EQ(a.height, b.height);
   constexpr std::uint32_t kPanelRight = 8 + 340 + 8; // overlay.cpp: the panel's position and width, and a margin
   int maxOutside = 0;
+  std::size_t valuesOutside = 0;
+  std::size_t differentOutside = 0;
   std::size_t differentInside = 0;
   for (std::uint32_t y = 0; y < a.height; ++y) {
     for (std::uint32_t x = 0; x < a.width; ++x) {
       int d = 0;
-      for (int c = 0; c < 3; ++c)
-        d = std::max(d, std::abs(int(encodeSrgb8(a.at(x, y)[c])) - encodeSrgb8(b.at(x, y)[c])));
+      for (int c = 0; c < 3; ++c) {
+        int dc = std::abs(int(encodeSrgb8(a.at(x, y)[c])) - encodeSrgb8(b.at(x, y)[c]));
+        d = std::max(d, dc);
+        if (x >= kPanelRight) {
+          ++valuesOutside;
+          differentOutside += dc != 0;
+        }
+      }
       if (x >= kPanelRight)
         maxOutside = std::max(maxOutside, d);
       else if (d > 8)
@@ -298,6 +310,8 @@ void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& windo
     }
   }
   EXPECT_LE(maxOutside, 1) << "8-bit levels between the window and the Renderer's image";
+  EXPECT_LE(double(differentOutside), maxDifferentShare * double(valuesOutside))
+      << "8-bit values that differ, of " << valuesOutside;
   EXPECT_GT(differentInside, std::size_t(kPanelRight) * a.height / 2) << "the overlay covers its panel";
 }
 
@@ -314,7 +328,7 @@ TEST_F(Viewer, TheWindowShowsTheRenderersImageWithTheOverlayOnTop) {
     EXPECT_EQ(r.err, "");
     EXPECT_NE(r.out.find("present mode: no vsync ("), std::string::npos) << "--no-vsync\n" << r.out;
     EXPECT_NE(r.out.find("resolve path: " + path + "\n"), std::string::npos) << r.out;
-    expectWindowShowsRenderersImage(shot, window);
+    expectWindowShowsRenderersImage(shot, window, path == "blit" ? 0.15 : 0.02);
   }
 }
 
