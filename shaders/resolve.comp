@@ -1,8 +1,8 @@
 // The viewer's resolve pass: turns the Renderer's per-pixel sums into displayable colour (average,
 // clamp, sRGB encode). Built twice (CMakeLists.txt): by default it writes a half-float image that is
 // then blitted (and scaled) to the swapchain; with VKRAY_RESOLVE_DIRECT it writes the swapchain image
-// itself, whatever its 8-bit format, which saves the blit and an image where the device allows it
-// (host/viewer/presenter.h).
+// itself, whatever its 8-bit format, with the overlay's panel composited, which saves the blit, an
+// image and the overlay's render pass where the device allows it (host/viewer/presenter.h).
 #version 450
 #extension GL_GOOGLE_include_directive : require
 
@@ -20,6 +20,10 @@ layout(binding = kResolveBindingSums, rgba32f) uniform readonly restrict imageBu
 // The swapchain image: no format named (shaderStorageImageWriteWithoutFormat), so one pipeline
 // writes BGRA and RGBA images alike; the store rounds to 8 bits.
 layout(binding = kResolveBindingDisplay) writeonly uniform image2D display;
+// The overlay's panel, drawn by Dear ImGui on a transparent image of the same size when it changes
+// (host/viewer/overlay.h): premultiplied colour and coverage, so `layer + (1 - coverage) * picture`
+// is what drawing the panel on the picture gives, and an unchanged panel costs no render pass.
+layout(binding = kResolveBindingOverlay) uniform sampler2D overlayLayer;
 #else
 // Half floats hold both sRGB-encoded values (for a UNORM swapchain, which the blit copies as they
 // are) and linear ones (for an sRGB swapchain, which the blit encodes) without visible banding.
@@ -56,5 +60,10 @@ void main() {
   vec4 s = imageLoad(sums, pixel.y * size.x + pixel.x); // row-major, as wide as the image written
   vec3 rgb = s.rgb / max(s.w, 1.0); // a pixel not traced yet (w = 0) has a zero sum: black
   rgb = ENCODE_SRGB ? linearToSrgb(rgb) : clamp(rgb, 0.0, 1.0);
+#ifdef VKRAY_RESOLVE_DIRECT
+  // ImGui blends in the swapchain's UNORM values, which hold sRGB-encoded colour: so does this.
+  vec4 panel = texelFetch(overlayLayer, pixel, 0);
+  rgb = panel.rgb + (1.0 - panel.a) * rgb;
+#endif
   imageStore(display, pixel, vec4(rgb, 1.0));
 }

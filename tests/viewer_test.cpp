@@ -282,12 +282,13 @@ TEST_F(Viewer, ScriptedRunExitsCleanlyUnderValidation) {
 // a flipped row order or a missing/double sRGB encoding would be off by far more. Under the panel the overlay was drawn
 // on the window, and not into the screenshot. Both resolve paths (presenter.h) are checked: lavapipe's swapchain images
 // are storage images, so the default is the direct one.
-void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& window, double maxDifferentShare) {
+// panelRight: 0 when the overlay is hidden (the whole window is compared).
+void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& window, double maxDifferentShare,
+                                     std::uint32_t panelRight = 8 + 340 + 8) {
   Image a = readImage(shot);
   Image b = readImage(window);
   ASSERT_EQ(a.width, b.width);
   ASSERT_EQ(a.height, b.height);
-  constexpr std::uint32_t kPanelRight = 8 + 340 + 8; // overlay.cpp: the panel's position and width, and a margin
   int maxOutside = 0;
   std::size_t valuesOutside = 0;
   std::size_t differentOutside = 0;
@@ -298,12 +299,12 @@ void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& windo
       for (int c = 0; c < 3; ++c) {
         int dc = std::abs(int(encodeSrgb8(a.at(x, y)[c])) - encodeSrgb8(b.at(x, y)[c]));
         d = std::max(d, dc);
-        if (x >= kPanelRight) {
+        if (x >= panelRight) {
           ++valuesOutside;
           differentOutside += dc != 0;
         }
       }
-      if (x >= kPanelRight)
+      if (x >= panelRight)
         maxOutside = std::max(maxOutside, d);
       else if (d > 8)
         ++differentInside;
@@ -312,7 +313,9 @@ void expectWindowShowsRenderersImage(const fs::path& shot, const fs::path& windo
   EXPECT_LE(maxOutside, 1) << "8-bit levels between the window and the Renderer's image";
   EXPECT_LE(double(differentOutside), maxDifferentShare * double(valuesOutside))
       << "8-bit values that differ, of " << valuesOutside;
-  EXPECT_GT(differentInside, std::size_t(kPanelRight) * a.height / 2) << "the overlay covers its panel";
+  if (panelRight > 0) {
+    EXPECT_GT(differentInside, std::size_t(panelRight) * a.height / 2) << "the overlay covers its panel";
+  }
 }
 
 TEST_F(Viewer, TheWindowShowsTheRenderersImageWithTheOverlayOnTop) {
@@ -330,6 +333,21 @@ TEST_F(Viewer, TheWindowShowsTheRenderersImageWithTheOverlayOnTop) {
     EXPECT_NE(r.out.find("resolve path: " + path + "\n"), std::string::npos) << r.out;
     expectWindowShowsRenderersImage(shot, window, path == "blit" ? 0.15 : 0.02);
   }
+}
+
+// On the direct path the panel is drawn on a layer that the resolve pass composites, and redrawn only
+// when it changes: hidden, the layer is cleared once and the window is the Renderer's image
+// everywhere.
+TEST_F(Viewer, WithTheOverlayHiddenTheWindowIsTheRenderersImage) {
+  fs::path shot = dir_ / "hidden-shot.png";
+  fs::path window = dir_ / "hidden-window.png";
+  RunResult r =
+      vkray("view '" + scene("showcase.json") + "' --width 480 --height 200 --frames 3 --no-vsync --no-overlay" +
+            " --screenshot '" + shot.string() + "' --screenshot-window '" + window.string() + "' --validate --stats");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("resolve path: direct\n"), std::string::npos) << r.out;
+  expectWindowShowsRenderersImage(shot, window, 0.02, 0);
 }
 
 // The viewer traces sample k of every pixel's sequence in frame k and adds it to the sums; the

@@ -42,9 +42,9 @@ void FrameRing::collect(std::uint32_t index) {
   double msPerTick = context_.timestampPeriodNs() * 1e-6;
   auto span = [&](Stamp a, Stamp b) { return ticks[b] >= ticks[a] ? double(ticks[b] - ticks[a]) * msPerTick : 0.0; };
   completed_.sum.trace += span(kStart, kTraced);
-  completed_.sum.resolve += span(kTraced, kResolved);
+  completed_.sum.resolve += span(kLayered, kResolved);
   completed_.sum.blit += span(kResolved, kBlitted);
-  completed_.sum.overlay += span(kBlitted, kDone);
+  completed_.sum.overlay += span(kTraced, kLayered) + span(kBlitted, kDone);
 }
 
 FrameRing::Slot& FrameRing::begin() {

@@ -16,15 +16,15 @@ struct FrameGpuTimes {
   double trace = 0.0;   // the Renderer's dispatch
   double resolve = 0.0; // resolve pass (sums to display colour)
   double blit = 0.0;    // blit to the swapchain image
-  double overlay = 0.0; // the overlay's render pass
+  double overlay = 0.0; // the overlay's render pass (on the layer or the swapchain image)
 };
 
 class FrameRing {
 public:
   static constexpr std::uint32_t kFramesInFlight = 2;
-  // Timestamps per frame: before the trace, after it, after the resolve, after the blit, after the
-  // overlay.
-  enum Stamp : std::uint32_t { kStart, kTraced, kResolved, kBlitted, kDone, kStampCount };
+  // Timestamps per frame: before the trace, after it, after the overlay's layer (direct path; none
+  // drawn in most frames), after the resolve, after the blit, after the overlay's pass (blit path).
+  enum Stamp : std::uint32_t { kStart, kTraced, kLayered, kResolved, kBlitted, kDone, kStampCount };
 
   explicit FrameRing(const vulkan::Context& context);
 

@@ -46,6 +46,32 @@ bool comboEnum(const char* label, E& value, std::initializer_list<std::pair<E, c
   return changed;
 }
 
+// Everything ImGui_ImplVulkan_RenderDrawData draws from, as bytes: equal bytes, equal pixels.
+void drawDataBytes(const ImDrawData* data, bool visible, std::vector<unsigned char>& out) {
+  out.clear();
+  auto put = [&out](const void* p, std::size_t n) {
+    const auto* bytes = static_cast<const unsigned char*>(p);
+    out.insert(out.end(), bytes, bytes + n);
+  };
+  if (!visible || data == nullptr) return;
+  put(&data->DisplayPos, sizeof data->DisplayPos);
+  put(&data->DisplaySize, sizeof data->DisplaySize);
+  put(&data->FramebufferScale, sizeof data->FramebufferScale);
+  for (int i = 0; i < data->CmdListsCount; ++i) {
+    const ImDrawList* list = data->CmdLists[i];
+    put(list->VtxBuffer.Data, sizeof(ImDrawVert) * static_cast<std::size_t>(list->VtxBuffer.Size));
+    put(list->IdxBuffer.Data, sizeof(ImDrawIdx) * static_cast<std::size_t>(list->IdxBuffer.Size));
+    for (const ImDrawCmd& c : list->CmdBuffer) {
+      put(&c.ClipRect, sizeof c.ClipRect);
+      put(&c.TextureId, sizeof c.TextureId);
+      put(&c.VtxOffset, sizeof c.VtxOffset);
+      put(&c.IdxOffset, sizeof c.IdxOffset);
+      put(&c.ElemCount, sizeof c.ElemCount);
+      put(&c.UserCallback, sizeof c.UserCallback);
+    }
+  }
+}
+
 } // namespace
 
 Overlay::ImGuiScope::ImGuiScope() {
@@ -101,19 +127,33 @@ Overlay::VulkanBackendScope::~VulkanBackendScope() {
 Overlay::Overlay(const vulkan::Context& context, const Window& window, const Swapchain& swapchain) : context_(context) {
   const auto& device = context.device();
   vulkan::vulkanStep("creating the overlay's render pass", [&] {
-    // The blit has written the picture: keep it (LOAD) and draw on top, then hand it to present.
     vk::AttachmentDescription color({}, swapchain.format(), vk::SampleCountFlagBits::e1, vk::AttachmentLoadOp::eLoad,
                                     vk::AttachmentStoreOp::eStore, vk::AttachmentLoadOp::eDontCare,
                                     vk::AttachmentStoreOp::eDontCare, vk::ImageLayout::eTransferDstOptimal,
                                     vk::ImageLayout::ePresentSrcKHR);
     vk::AttachmentReference ref(0, vk::ImageLayout::eColorAttachmentOptimal);
     vk::SubpassDescription subpass({}, vk::PipelineBindPoint::eGraphics, {}, ref);
-    // The blit's writes must land before the attachment is loaded and drawn on.
-    vk::SubpassDependency afterBlit(
-        VK_SUBPASS_EXTERNAL, 0, vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eColorAttachmentOutput,
-        vk::AccessFlagBits::eTransferWrite,
-        vk::AccessFlagBits::eColorAttachmentRead | vk::AccessFlagBits::eColorAttachmentWrite);
-    renderPass_ = vk::raii::RenderPass(device, vk::RenderPassCreateInfo({}, color, subpass, afterBlit));
+    // The two passes differ only in their attachment's load operation and layouts, so that ImGui's
+    // one pipeline fits both (render-pass compatibility); their dependencies are the same pair,
+    // covering both uses. In: the blit's writes (swapchain pass), or the earlier frames' resolve
+    // reads of the layer (layer pass), before the attachment is loaded or cleared and drawn on.
+    // Out: the layer's drawing before the resolve pass reads it.
+    std::array<vk::SubpassDependency, 2> deps{
+        vk::SubpassDependency(VK_SUBPASS_EXTERNAL, 0,
+                              vk::PipelineStageFlagBits::eTransfer | vk::PipelineStageFlagBits::eComputeShader,
+                              vk::PipelineStageFlagBits::eColorAttachmentOutput, vk::AccessFlagBits::eTransferWrite,
+                              vk::AccessFlagBits::eColorAttachmentRead | vk::AccessFlagBits::eColorAttachmentWrite),
+        vk::SubpassDependency(0, VK_SUBPASS_EXTERNAL, vk::PipelineStageFlagBits::eColorAttachmentOutput,
+                              vk::PipelineStageFlagBits::eComputeShader, vk::AccessFlagBits::eColorAttachmentWrite,
+                              vk::AccessFlagBits::eShaderRead)};
+    // Swapchain pass: the blit has written the picture; keep it (LOAD), draw on top, hand it to present.
+    renderPass_ = vk::raii::RenderPass(device, vk::RenderPassCreateInfo({}, color, subpass, deps));
+    // Layer pass: cleared to transparent, drawn on, read by the resolve pass that follows.
+    vk::AttachmentDescription layer({}, swapchain.format(), vk::SampleCountFlagBits::e1, vk::AttachmentLoadOp::eClear,
+                                    vk::AttachmentStoreOp::eStore, vk::AttachmentLoadOp::eDontCare,
+                                    vk::AttachmentStoreOp::eDontCare, vk::ImageLayout::eUndefined,
+                                    vk::ImageLayout::eShaderReadOnlyOptimal);
+    layerPass_ = vk::raii::RenderPass(device, vk::RenderPassCreateInfo({}, layer, subpass, deps));
     // The backend needs one combined image sampler (the font atlas).
     vk::DescriptorPoolSize size(vk::DescriptorType::eCombinedImageSampler, 4);
     pool_ = vk::raii::DescriptorPool(
@@ -135,7 +175,14 @@ void Overlay::attach(const Swapchain& swapchain) {
       framebuffers_.emplace_back(context_.device(),
                                  vk::FramebufferCreateInfo({}, *renderPass_, view, extent_.width, extent_.height, 1));
     }
+    layerFramebuffer_ = vk::raii::Framebuffer(nullptr);
+    layer_ = DeviceImage();
+    layer_ = makeDeviceImage(context_, swapchain.format(),
+                             vk::ImageUsageFlagBits::eColorAttachment | vk::ImageUsageFlagBits::eSampled, extent_);
+    layerFramebuffer_ = vk::raii::Framebuffer(
+        context_.device(), vk::FramebufferCreateInfo({}, *layerPass_, *layer_.view, extent_.width, extent_.height, 1));
   });
+  layerValid_ = false;
 }
 
 void Overlay::newFrame() {
@@ -254,6 +301,21 @@ void Overlay::record(const vk::raii::CommandBuffer& cmd, std::uint32_t imageInde
   ImDrawData* data = ImGui::GetDrawData();
   if (visible && data != nullptr && data->CmdListsCount > 0) ImGui_ImplVulkan_RenderDrawData(data, *cmd);
   cmd.endRenderPass();
+}
+
+bool Overlay::recordLayer(const vk::raii::CommandBuffer& cmd) {
+  ImDrawData* data = ImGui::GetDrawData();
+  std::vector<unsigned char> now;
+  drawDataBytes(data, visible, now);
+  if (layerValid_ && now == layerDrawn_) return false;
+  vk::ClearValue transparent(vk::ClearColorValue(std::array<float, 4>{0.0f, 0.0f, 0.0f, 0.0f}));
+  vk::RenderPassBeginInfo begin(*layerPass_, *layerFramebuffer_, vk::Rect2D({0, 0}, extent_), transparent);
+  cmd.beginRenderPass(begin, vk::SubpassContents::eInline);
+  if (visible && data != nullptr && data->CmdListsCount > 0) ImGui_ImplVulkan_RenderDrawData(data, *cmd);
+  cmd.endRenderPass();
+  layerDrawn_ = std::move(now);
+  layerValid_ = true;
+  return true;
 }
 
 } // namespace vkray

@@ -1,5 +1,7 @@
 // The viewer's overlay (Dear ImGui): timings, ray statistics and the scene's Features, and controls for
-// the accuracy knobs and effects. Drawn in its own render pass on top of the blitted image.
+// the accuracy knobs and effects. On the direct path (presenter.h) the panel is drawn on a
+// transparent layer only when it changes, and the resolve pass composites that layer; on the blit
+// path it is drawn on the blitted swapchain image every frame.
 #pragma once
 
 #include <cstdint>
@@ -10,6 +12,7 @@
 
 #include "render/renderer.h"
 #include "viewer/camera_controller.h"
+#include "viewer/device_image.h"
 #include "viewer/swapchain.h"
 #include "viewer/view_settings.h"
 #include "viewer/window.h"
@@ -54,8 +57,8 @@ public:
   Overlay(const Overlay&) = delete;
   Overlay& operator=(const Overlay&) = delete;
 
-  // Framebuffers for the swapchain's current images (after every re-creation); detach() drops them
-  // before the swapchain's image views go.
+  // Framebuffers for the swapchain's current images and a layer of their size (after every
+  // re-creation); detach() drops the framebuffers before the swapchain's image views go.
   void attach(const Swapchain& swapchain);
   void detach() { framebuffers_.clear(); }
 
@@ -68,6 +71,12 @@ public:
   // Records the overlay's render pass on the swapchain image, which arrives in TRANSFER_DST_OPTIMAL
   // (after the blit) and leaves in PRESENT_SRC_KHR.
   void record(const vk::raii::CommandBuffer& cmd, std::uint32_t imageIndex);
+  // The direct path's alternative: draws the panel (nothing when hidden) on the cleared layer, which
+  // is left in SHADER_READ_ONLY_OPTIMAL for the resolve pass, but only when its draw data differ
+  // from what the layer holds (most frames differ in nothing: the figures change twice a second).
+  // Returns whether it recorded the pass. Later frames' passes wait for earlier frames' reads.
+  bool recordLayer(const vk::raii::CommandBuffer& cmd);
+  vk::ImageView layerView() const { return *layer_.view; }
 
   bool visible = true;
 
@@ -91,8 +100,13 @@ private:
   vk::Extent2D extent_{0, 0};
   // Vulkan objects first: the backend scopes below are destroyed before them.
   vk::raii::RenderPass renderPass_{nullptr};
+  vk::raii::RenderPass layerPass_{nullptr}; // the same attachment format: ImGui's pipeline fits both
   vk::raii::DescriptorPool pool_{nullptr};
   std::vector<vk::raii::Framebuffer> framebuffers_;
+  DeviceImage layer_;
+  vk::raii::Framebuffer layerFramebuffer_{nullptr};
+  std::vector<unsigned char> layerDrawn_; // the draw data the layer holds (drawDataBytes)
+  bool layerValid_ = false;               // false until drawn after (re-)creation
   ImGuiScope imgui_;
   std::unique_ptr<GlfwBackendScope> glfwBackend_;
   std::unique_ptr<VulkanBackendScope> vulkanBackend_;

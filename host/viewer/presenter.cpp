@@ -14,17 +14,6 @@ namespace vkray {
 namespace {
 
 constexpr vk::Format kDisplayFormat = vk::Format::eR16G16B16A16Sfloat; // see resolve.comp
-const vk::ImageSubresourceRange kColorRange(vk::ImageAspectFlagBits::eColor, 0, 1, 0, 1);
-
-std::uint32_t deviceLocalType(const vulkan::Context& context, std::uint32_t typeBits) {
-  auto props = context.physicalDevice().getMemoryProperties();
-  for (auto want : {vk::MemoryPropertyFlags(vk::MemoryPropertyFlagBits::eDeviceLocal), vk::MemoryPropertyFlags()}) {
-    for (std::uint32_t i = 0; i < props.memoryTypeCount; ++i) {
-      if ((typeBits & (1u << i)) && (props.memoryTypes[i].propertyFlags & want) == want) return i;
-    }
-  }
-  throw DeviceError("creating the viewer's images: no memory type fits");
-}
 
 } // namespace
 
@@ -32,20 +21,28 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
     : context_(context) {
   const auto& device = context.device();
   vulkan::vulkanStep("creating the viewer's resolve pass", [&] {
-    std::array<vk::DescriptorSetLayoutBinding, 2> bindings{
+    // The layer is read by the direct variant only.
+    std::array<vk::DescriptorSetLayoutBinding, 3> bindings{
         vk::DescriptorSetLayoutBinding(gpu::kResolveBindingSums, vk::DescriptorType::eStorageTexelBuffer, 1,
                                        vk::ShaderStageFlagBits::eCompute),
         vk::DescriptorSetLayoutBinding(gpu::kResolveBindingDisplay, vk::DescriptorType::eStorageImage, 1,
+                                       vk::ShaderStageFlagBits::eCompute),
+        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingOverlay, vk::DescriptorType::eCombinedImageSampler, 1,
                                        vk::ShaderStageFlagBits::eCompute)};
     setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, {}));
-    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 1),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 1)};
+    std::array<vk::DescriptorPoolSize, 3> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 1),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 1),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 1)};
     pool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
     vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*pool_, layouts));
     set_ = std::move(sets.front());
+    layerSampler_ = vk::raii::Sampler(
+        device, vk::SamplerCreateInfo({}, vk::Filter::eNearest, vk::Filter::eNearest, vk::SamplerMipmapMode::eNearest,
+                                      vk::SamplerAddressMode::eClampToEdge, vk::SamplerAddressMode::eClampToEdge,
+                                      vk::SamplerAddressMode::eClampToEdge));
   });
   vulkan::Specialization spec;
   spec.set(gpu::kResolveSpecEncodeSrgb, encodeSrgb);
@@ -59,23 +56,33 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
   }
 }
 
-void Presenter::attach(const Swapchain& swapchain) {
+void Presenter::attach(const Swapchain& swapchain, vk::ImageView overlayLayer) {
   detach();
+  // The blit variant reads no layer, but lavapipe binds every descriptor of a set and crashes on an
+  // unwritten sampler: the blit path's set names the layer too.
+  vk::DescriptorImageInfo layerInfo(*layerSampler_, overlayLayer, vk::ImageLayout::eShaderReadOnlyOptimal);
+  context_.device().updateDescriptorSets(vk::WriteDescriptorSet(*set_, gpu::kResolveBindingOverlay, 0, 1,
+                                                                vk::DescriptorType::eCombinedImageSampler, &layerInfo),
+                                         {});
   if (!directPipeline_ || !swapchain.storable() || swapchain.imageCount() == 0) return;
   const auto& device = context_.device();
   vulkan::vulkanStep("creating the viewer's direct resolve sets", [&] {
     const auto n = static_cast<std::uint32_t>(swapchain.imageCount());
-    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, n),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, n)};
+    std::array<vk::DescriptorPoolSize, 3> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, n),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, n),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, n)};
     directPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, n, sizes));
     std::vector<vk::DescriptorSetLayout> layouts(n, *setLayout_);
     directSets_ = vk::raii::DescriptorSets(device, vk::DescriptorSetAllocateInfo(*directPool_, layouts));
     for (std::uint32_t i = 0; i < n; ++i) {
       vk::DescriptorImageInfo imageInfo(nullptr, swapchain.view(i), vk::ImageLayout::eGeneral);
-      vk::WriteDescriptorSet write(*directSets_[i], gpu::kResolveBindingDisplay, 0, 1,
-                                   vk::DescriptorType::eStorageImage, &imageInfo);
-      device.updateDescriptorSets(write, {});
+      std::array<vk::WriteDescriptorSet, 2> writes{
+          vk::WriteDescriptorSet(*directSets_[i], gpu::kResolveBindingDisplay, 0, 1, vk::DescriptorType::eStorageImage,
+                                 &imageInfo),
+          vk::WriteDescriptorSet(*directSets_[i], gpu::kResolveBindingOverlay, 0, 1,
+                                 vk::DescriptorType::eCombinedImageSampler, &layerInfo)};
+      device.updateDescriptorSets(writes, {});
     }
   });
   if (sumsView_) writeSums();
@@ -91,25 +98,10 @@ void Presenter::writeSums() {
   writes.emplace_back(*set_, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr, nullptr,
                       &sumsView_);
   for (const auto& set : directSets_) {
-    writes.emplace_back(*set, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr,
-                        nullptr, &sumsView_);
+    writes.emplace_back(*set, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr, nullptr,
+                        &sumsView_);
   }
   context_.device().updateDescriptorSets(writes, {});
-}
-
-Presenter::OwnedImage Presenter::makeImage(vk::Format format, vk::ImageUsageFlags usage, vk::Extent2D size) const {
-  const auto& device = context_.device();
-  OwnedImage out;
-  vk::ImageCreateInfo info({}, vk::ImageType::e2D, format, vk::Extent3D(size.width, size.height, 1), 1, 1,
-                           vk::SampleCountFlagBits::e1, vk::ImageTiling::eOptimal, usage);
-  out.image = vk::raii::Image(device, info);
-  auto req = out.image.getMemoryRequirements();
-  out.memory =
-      vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(req.size, deviceLocalType(context_, req.memoryTypeBits)));
-  out.image.bindMemory(*out.memory, 0);
-  out.view = vk::raii::ImageView(
-      device, vk::ImageViewCreateInfo({}, *out.image, vk::ImageViewType::e2D, format, {}, kColorRange));
-  return out;
 }
 
 void Presenter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size) {
@@ -118,9 +110,9 @@ void Presenter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size
     sums_ = sums;
     sumsView_ = sumsView;
     if (size != size_) {
-      display_ = OwnedImage();
-      display_ =
-          makeImage(kDisplayFormat, vk::ImageUsageFlagBits::eStorage | vk::ImageUsageFlagBits::eTransferSrc, size);
+      display_ = DeviceImage();
+      display_ = makeDeviceImage(context_, kDisplayFormat,
+                                 vk::ImageUsageFlagBits::eStorage | vk::ImageUsageFlagBits::eTransferSrc, size);
     }
     vk::DescriptorImageInfo displayInfo(nullptr, *display_.view, vk::ImageLayout::eGeneral);
     vk::WriteDescriptorSet write(*set_, gpu::kResolveBindingDisplay, 0, 1, vk::DescriptorType::eStorageImage,
@@ -160,11 +152,12 @@ void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, const Target& tar
   using Access = vk::AccessFlagBits;
   using Layout = vk::ImageLayout;
   if (direct(target)) {
-    // The resolve wrote the picture: on to the layout the overlay's pass starts from, its writes
-    // before that pass loads and draws on the image.
-    vk::ImageMemoryBarrier written(Access::eShaderWrite, Access::eColorAttachmentRead | Access::eColorAttachmentWrite,
-                                   Layout::eGeneral, Layout::eTransferDstOptimal, VK_QUEUE_FAMILY_IGNORED,
-                                   VK_QUEUE_FAMILY_IGNORED, target.image, kColorRange);
+    // The resolve wrote the picture, overlay and all: on to presentation (the submission's semaphore
+    // orders the present after it). The destination stage is the one the overlay's pass ends at on
+    // the other path, which a window read-back chains to.
+    vk::ImageMemoryBarrier written(Access::eShaderWrite, Access::eColorAttachmentWrite, Layout::eGeneral,
+                                   Layout::ePresentSrcKHR, VK_QUEUE_FAMILY_IGNORED, VK_QUEUE_FAMILY_IGNORED,
+                                   target.image, kColorRange);
     cmd.pipelineBarrier(Stage::eComputeShader, Stage::eColorAttachmentOutput, {}, {}, {}, written);
     return;
   }

@@ -2,8 +2,10 @@
 // its per-pixel sums, a storage texel buffer, and turns them into display colour. Two paths:
 // - direct: where the swapchain images are storage images (Swapchain::storable) and the render size
 //   is the window's, the pass writes the acquired swapchain image itself;
+//   It composites the overlay's layer (Overlay::recordLayer) on the way, so the image is ready to
+//   present;
 // - blit: otherwise (a scaled render, or a device that cannot), it writes a half-float storage image,
-//   which is blitted, scaled if need be, to the swapchain image.
+//   which is blitted, scaled if need be, to the swapchain image, and the overlay draws on that.
 // On lavapipe the direct path saves about 2 ms a frame at 640 x 480 (docs/viewer.md).
 #pragma once
 
@@ -11,6 +13,7 @@
 
 #include <vulkan/vulkan_raii.hpp>
 
+#include "viewer/device_image.h"
 #include "vk/compute_pipeline.h"
 #include "vk/context.h"
 
@@ -29,8 +32,10 @@ public:
   // rewrites the descriptor sets.
   void bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size);
   // Builds the direct path's descriptor sets for the swapchain's images (none when it is not
-  // storable), and drops them before the swapchain is re-created. Only while no frame is pending.
-  void attach(const Swapchain& swapchain);
+  // storable), with the overlay's layer (a sampled image of the swapchain's size and format, in
+  // SHADER_READ_ONLY_OPTIMAL when read), and drops them before the swapchain is re-created. Only
+  // while no frame is pending.
+  void attach(const Swapchain& swapchain, vk::ImageView overlayLayer);
   void detach();
 
   // The swapchain image a frame is shown on: its index, handle and size.
@@ -41,14 +46,17 @@ public:
   };
   // Whether a frame on `target` takes the direct path.
   bool direct(const Target& target) const { return !directSets_.empty() && target.extent == size_; }
-  // Records the resolve pass, into the swapchain image (direct) or the display image. The trace's writes to the sums precede it in the command buffer; the submission
-  // waits for the image's acquisition at the transfer stage, which this chains to.
+  // Records the resolve pass, into the swapchain image (direct) or the display image. The trace's writes to the sums
+  // precede it in the command buffer; the submission waits for the image's acquisition at the transfer stage, which
+  // this chains to.
   void recordResolve(const vk::raii::CommandBuffer& cmd, const Target& target) const;
-  // Records the blit of the display image into the target (or, on the direct path, only the
-  // transition), which ends in TRANSFER_DST_OPTIMAL either way.
+  // Records the blit of the display image into the target, which ends in TRANSFER_DST_OPTIMAL for
+  // the overlay's pass; on the direct path only the transition to PRESENT_SRC_KHR (the overlay is
+  // in the picture already).
   void recordBlit(const vk::raii::CommandBuffer& cmd, const Target& target) const;
 
-  // Records a copy of a presentable swapchain image (after the overlay's pass, in PRESENT_SRC) into a
+  // Records a copy of a presentable swapchain image (in PRESENT_SRC, after the overlay's pass or the
+  // direct path's transition, both of which end at the colour-attachment-output stage) into a
   // host-visible buffer, and gives the image back to presentation. For window screenshots.
   static void recordWindowReadback(const vk::raii::CommandBuffer& cmd, vk::Image shown, vk::Extent2D extent,
                                    vk::Buffer pixels);
@@ -66,16 +74,10 @@ private:
   std::unique_ptr<vulkan::ComputePipeline> directPipeline_; // null where the device cannot
   vk::raii::DescriptorPool directPool_{nullptr};            // one set per swapchain image
   std::vector<vk::raii::DescriptorSet> directSets_;
-  // An image with its memory and view; memory declared first, so it is released last.
-  struct OwnedImage {
-    vk::raii::DeviceMemory memory{nullptr};
-    vk::raii::Image image{nullptr};
-    vk::raii::ImageView view{nullptr};
-  };
-  OwnedImage makeImage(vk::Format format, vk::ImageUsageFlags usage, vk::Extent2D size) const;
   void writeSums(); // the sums' view into every set
 
-  OwnedImage display_; // resolved colour, the blit's source (blit path)
+  vk::raii::Sampler layerSampler_{nullptr}; // nearest: the layer is read texel for texel
+  DeviceImage display_;                     // resolved colour, the blit's source (blit path)
   vk::Buffer sums_;
   vk::BufferView sumsView_;
   vk::Extent2D size_{0, 0};

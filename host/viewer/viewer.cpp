@@ -103,9 +103,9 @@ public:
     }
     lastFramebuffer_ = window.framebufferSize();
     if (!swapchain_.recreate(lastFramebuffer_)) swapchainStale_ = true;
-    presenter_.attach(swapchain_);
     overlay_ = std::make_unique<Overlay>(context, window, swapchain_);
     overlay_->visible = options.overlay;
+    presenter_.attach(swapchain_, overlay_->layerView());
   }
 
   int run();
@@ -168,6 +168,9 @@ private:
   FrameTimes interval_;
   RayStats intervalRays_;
   FrameTimes shown_;
+  // The sample count the overlay shows: updated with the figures, twice a second, or at once when
+  // accumulation restarts; a panel that changes in nothing is not redrawn (Overlay::recordLayer).
+  std::uint32_t shownSamples_ = 0;
   FrameTimes total_;
   std::uint64_t totalRays_ = 0;
   // Rays are counted in a sample of the frames (takeCountTurn): those in the interval and in total.
@@ -199,7 +202,7 @@ void FrameLoop::recreateSwapchain(vk::Extent2D framebuffer) {
   lastFramebuffer_ = framebuffer;
   if (!swapchainStale_) {
     overlay_->attach(swapchain_);
-    presenter_.attach(swapchain_);
+    presenter_.attach(swapchain_, overlay_->layerView());
   }
 }
 
@@ -321,6 +324,7 @@ void FrameLoop::publishStats(bool force) {
     raysPerSecond_ = traceMs > 0.0 ? static_cast<double>(s.total()) / n / (traceMs * 1e-3) : 0.0;
   }
   if (interval_.frames > 0) shown_ = interval_;
+  shownSamples_ = accumulation_.samples();
   total_.wallMs += interval_.wallMs;
   total_.hostMs += interval_.hostMs;
   total_.waitMs += interval_.waitMs;
@@ -357,11 +361,14 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
     frames_.stamp(cmd, FrameRing::kTraced, vk::PipelineStageFlagBits::eComputeShader);
     const Presenter::Target target{imageIndex, swapchain_.image(imageIndex), swapchain_.extent()};
     lastResolveDirect_ = presenter_.direct(target);
+    // Direct path: the panel goes on its layer (when it changed) and the resolve composites it.
+    if (lastResolveDirect_) overlay_->recordLayer(cmd);
+    frames_.stamp(cmd, FrameRing::kLayered, vk::PipelineStageFlagBits::eColorAttachmentOutput);
     presenter_.recordResolve(cmd, target);
     frames_.stamp(cmd, FrameRing::kResolved, vk::PipelineStageFlagBits::eComputeShader);
     presenter_.recordBlit(cmd, target);
     frames_.stamp(cmd, FrameRing::kBlitted, vk::PipelineStageFlagBits::eTransfer);
-    overlay_->record(cmd, imageIndex);
+    if (!lastResolveDirect_) overlay_->record(cmd, imageIndex);
     frames_.stamp(cmd, FrameRing::kDone, vk::PipelineStageFlagBits::eBottomOfPipe);
     if (captureWindow) {
       Presenter::recordWindowReadback(cmd, swapchain_.image(imageIndex), swapchain_.extent(), windowPixels_->handle());
@@ -474,7 +481,7 @@ OverlayModel FrameLoop::overlayModel() const {
   m.device = context_.info().name;
   m.presentMode = presentModeName(swapchain_.presentMode());
   m.renderSize = presenter_.size();
-  m.samples = accumulation_.samples();
+  m.samples = shownSamples_;
   m.frameMs = shown_.per(shown_.wallMs, shown_.frames);
   m.hostMs = shown_.per(shown_.hostMs, shown_.frames);
   m.traceMs = shown_.per(shown_.gpu.trace, shown_.gpuFrames);
@@ -547,6 +554,7 @@ int FrameLoop::run() {
     if (window_.takeResized() || swapchainStale_ || fb != lastFramebuffer_) recreateSwapchain(fb);
     if (swapchainStale_) continue;
 
+    shownSamples_ = std::min(shownSamples_, accumulation_.samples()); // a restart shows at once
     overlay_->newFrame();
     const Camera cameraBefore = camera_.camera();
     handleInput(input, dt);

@@ -11,6 +11,7 @@ namespace vkray::gpu {
 
 VKRAY_CONST(uint, kResolveBindingSums, 0u);    // storage texel buffer: the Renderer's (sum rgb, samples)
 VKRAY_CONST(uint, kResolveBindingDisplay, 1u); // storage image: the swapchain image, or one blitted to it
+VKRAY_CONST(uint, kResolveBindingOverlay, 2u); // sampled image: the overlay's layer (direct variant only)
 VKRAY_CONST(uint, kResolveSpecEncodeSrgb, 0u); // 1: write sRGB-encoded values (UNORM target)
 // Rows of 64: the pass does little per pixel, and on lavapipe each workgroup has a fixed cost
 // (8 x 8 groups made the pass 20 % slower at 640 x 480).
