@@ -79,6 +79,12 @@ TEST_F(Cli, RendersAPngWithStatistics) {
     EXPECT_TRUE(stats.count(key)) << "missing statistic " << key;
   }
   EXPECT_EQ(stats["eye rays"], "3072");
+  // The sky above the showcase is filled, not traced (row culling): whole workgroup rows of it.
+  int culled = std::stoi(stats["culled rows"]);
+  EXPECT_GT(culled, 0);
+  EXPECT_LT(culled, 48);
+  EXPECT_EQ(culled % 8, 0);
+  EXPECT_NE(stats["culled rows"].find(" of 48"), std::string::npos);
   EXPECT_NE(stats["trace"].find(" ms"), std::string::npos);
   EXPECT_GT(std::stod(stats["rays per second"]), 0.0);
 }

@@ -17,6 +17,7 @@ struct BenchTimeArgs {
   RenderFlags render;
   int runs = 7;
   bool noSpecialize = false;
+  bool noRowCulling = false;
   std::string sceneMemory = "auto";
 };
 

@@ -48,6 +48,7 @@ int runBenchTime(const BenchTimeArgs& args) {
     RenderOptions options;
     options.countStats = false;
     options.specialize = !args.noSpecialize;
+    options.cullRows = !args.noRowCulling;
     options.sceneMemory = args.sceneMemory == "uniform"   ? SceneMemory::Uniform
                           : args.sceneMemory == "storage" ? SceneMemory::Storage
                                                           : SceneMemory::Auto;

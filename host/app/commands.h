@@ -19,6 +19,7 @@ struct RenderArgs {
   bool explain = false;
   bool quiet = false;
   bool noSpecialize = false;
+  bool noRowCulling = false;
   double bandMs = 100.0;
   std::string sceneMemory = "auto";
 };

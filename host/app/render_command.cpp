@@ -83,6 +83,7 @@ int runRender(const RenderArgs& args) {
   ProgressBar bar(!args.quiet);
   RenderOptions options;
   options.specialize = !args.noSpecialize;
+  options.cullRows = !args.noRowCulling;
   options.countStats = args.stats;
   options.bandBudgetMs = args.bandMs;
   options.sceneMemory = args.sceneMemory == "uniform"   ? SceneMemory::Uniform
@@ -150,6 +151,8 @@ int runRender(const RenderArgs& args) {
     printStat("trace", result.timings.traceMs);
     printStat("trace wall", result.timings.traceWallMs);
     std::printf("bands: %d\n", result.timings.bands);
+    // Rows whose eye rays provably miss everything, filled with the background instead of traced.
+    std::printf("culled rows: %u of %u\n", result.timings.culledRows, scene.render.height);
     printStat("readback", result.timings.readbackMs);
     printStat("write", writeMs);
     printStat("total", msSince(t0));
@@ -183,8 +186,9 @@ int runInfo(const DeviceFlags& flags) {
     std::printf("  timestamps: %s (GPU trace time)\n", d.timestamps ? "yes" : "no");
     std::printf("  maxStorageBufferRange: %llu MiB (largest sphere, plane, polygon or material array)\n",
                 static_cast<unsigned long long>(d.maxStorageBufferRange >> 20));
-    std::printf("  maxTexelBufferElements: %llu (texels of the triangle, normal and BVH arrays; pixels per image band)\n",
-                static_cast<unsigned long long>(d.maxTexelBufferElements));
+    std::printf(
+        "  maxTexelBufferElements: %llu (texels of the triangle, normal and BVH arrays; pixels per image band)\n",
+        static_cast<unsigned long long>(d.maxTexelBufferElements));
     std::printf("  maxMemoryAllocationSize: %llu MiB\n",
                 static_cast<unsigned long long>(d.maxMemoryAllocationSize >> 20));
   }

@@ -28,6 +28,7 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   cmd->add_flag("--no-ray-counts", a.noRayCounts,
                 "start with the ray counters off (on, they count one frame in 8, which costs 10-20 % more)");
   cmd->add_flag("--no-specialize", a.noSpecialize, "compile every feature in (for comparison)");
+  cmd->add_flag("--no-row-culling", a.noRowCulling, "trace rows that provably see nothing (for comparison)");
   cmd->add_flag("--no-direct-resolve", a.noDirectResolve,
                 "always resolve into an intermediate image and blit it, even where the window's images could "
                 "be written directly (for comparison)");
@@ -65,6 +66,7 @@ int runView(const ViewArgs& a) {
   ViewerOptions o = baseViewerOptions(a.scene, a.render, a.device);
   o.syncValidate = a.device.syncValidate;
   o.specialize = !a.noSpecialize;
+  o.cullRows = !a.noRowCulling;
   o.directResolve = !a.noDirectResolve;
   o.vsync = !a.noVsync;
   o.renderScale = a.scale;
@@ -96,6 +98,7 @@ CLI::App* addBenchViewCommand(CLI::App& bench, BenchViewArgs& a) {
   cmd->add_option("--frames", a.frames, "timed frames per row (after 5 warm-up frames)")
       ->check(CLI::Range(1u, 100000u));
   cmd->add_option("--spin", a.spin, "degrees the camera orbits per frame in the moving rows");
+  cmd->add_flag("--no-row-culling", a.noRowCulling, "trace rows that provably see nothing (for comparison)");
   addRenderFlags(*cmd, a.render);
   addDeviceFlags(*cmd, a.device);
   return cmd;
@@ -127,6 +130,7 @@ int runBenchView(const BenchViewArgs& a) {
       o.spinDegrees = row.moving ? a.spin : 0.0;
       o.motionScale = row.motionScale;
       o.renderScale = row.scale;
+      o.cullRows = !a.noRowCulling;
       o.frames = a.frames + 5; // the viewer leaves the first 5 out of its figures
       ViewerSummary v;
       o.summary = &v;

@@ -163,9 +163,11 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
                                         glm::vec4(rel(t.v[2], origin), 0.0f)});
   }
 
+  const std::vector<BvhPrimitive> prims = bvhPrimitives(scene, g);
+  for (const BvhPrimitive& p : prims) g.bounds.grow(p.bounds);
   if (withBvh) {
     auto start = std::chrono::steady_clock::now();
-    g.bvh = buildBvh(bvhPrimitives(scene, g), bvhOptions);
+    g.bvh = buildBvh(prims, bvhOptions);
     orderByLeaves(g);
     g.bvhRoot = wideBvh(g.bvh, g.bvhNodes);
     // Build time as --stats reports it: from packed primitives to the final arrays.

@@ -27,6 +27,10 @@ struct GpuScene {
   std::vector<gpu::Polygon> polygons;
   std::vector<glm::vec4> polyVertices;
   std::vector<glm::vec4> normals;
+  // A box holding every sphere, triangle and polygon of the packed scene, in float and conservative
+  // (the union of bvhPrimitives' boxes); empty when there are none. Eye-ray culling uses it
+  // (render/row_culling.h).
+  Aabb bounds;
   Bvh bvh; // empty unless asked for
   // The BVH in the shader's layout (wideBvh) and its root reference.
   std::vector<gpu::BvhWideNode> bvhNodes;

@@ -259,7 +259,8 @@ void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool n
   if (rebuild) {
     vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width) * rows * sizeof(glm::vec4);
     image_.reset(); // the old window's memory goes back first
-    image_ = std::make_unique<vulkan::Buffer>(context_, bytes, kImageTexelFormat, vulkan::MemoryUse::DeviceLocal, "image");
+    image_ =
+        std::make_unique<vulkan::Buffer>(context_, bytes, kImageTexelFormat, vulkan::MemoryUse::DeviceLocal, "image");
     imageWidth_ = width;
     imageRows_ = rows;
   }
@@ -305,6 +306,7 @@ void Renderer::updateDescriptors() {
 
 void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, const Features& f) {
   CameraFrame cam = makeCameraFrame(camera, s.width, s.height);
+  cull_ = makeCullScene(gpuScene_, cam);
   gpu::FrameParams p{};
   p.cameraForward = glm::vec4(glm::vec3(cam.forward), 0.0f);
   p.cameraRight = glm::vec4(glm::vec3(cam.right * (cam.tanHalfFovY * cam.aspect)), 0.0f);
@@ -325,8 +327,16 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
 }
 
 void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
-                              const gpu::PushConstants& push, bool timestamps) {
-  cmd.bindPipeline(vk::PipelineBindPoint::eCompute, pipeline.handle());
+                              const gpu::PushConstants& push, bool timestamps, const vulkan::ComputePipeline* fill) {
+  // Row culling: the dispatch's rows in runs of whole workgroup rows, each traced or filled.
+  std::vector<RowRun> runs;
+  if (fill != nullptr) {
+    runs = splitRows(cull_, frameWidth_, frameHeight_, push.tileOrigin.y, push.tileSize.y, gpu::kWorkgroupSizeY);
+  } else {
+    runs.push_back({push.tileOrigin.y, push.tileSize.y, false});
+  }
+  lastCulledRows_ = 0;
+  for (const RowRun& run : runs) lastCulledRows_ += run.empty ? run.rows : 0;
   cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *queryPool_, 0);
   // One dispatch per sample, each adding to the sums of the one before. llvmpipe (lavapipe) stops
@@ -349,10 +359,15 @@ void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::
                             sums, {}, {});
       }
     }
-    cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, one);
-    // Round up: the last partial workgroup covers the remaining pixels, the shader bounds-checks.
-    cmd.dispatch((push.tileSize.x + gpu::kWorkgroupSizeX - 1) / gpu::kWorkgroupSizeX,
-                 (push.tileSize.y + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY, 1);
+    for (const RowRun& run : runs) {
+      one.tileOrigin = glm::uvec2(push.tileOrigin.x, run.row0);
+      one.tileSize = glm::uvec2(push.tileSize.x, run.rows);
+      cmd.bindPipeline(vk::PipelineBindPoint::eCompute, (run.empty ? *fill : pipeline).handle());
+      cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, one);
+      // Round up: the last partial workgroup covers the remaining pixels, the shader bounds-checks.
+      cmd.dispatch((one.tileSize.x + gpu::kWorkgroupSizeX - 1) / gpu::kWorkgroupSizeX,
+                   (one.tileSize.y + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY, 1);
+    }
   }
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *queryPool_, 1);
 }
@@ -450,7 +465,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       try {
         context_.submitAndWait(step, [&](const vk::raii::CommandBuffer& cmd) {
           if (timestamps_) cmd.resetQueryPool(*queryPool_, 0, 2);
-          recordDispatch(cmd, refine ? *refinePipeline_ : *samplePipeline_, push, timestamps_);
+          recordDispatch(cmd, refine ? *refinePipeline_ : *samplePipeline_, push, timestamps_,
+                         refine ? nullptr : fillPipeline_);
           // Shader writes must be visible to the host's mapped reads (or the readback copy).
           vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
                                     vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
@@ -462,6 +478,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
         throw DeviceLostError(std::string(e.what()) + " in the band of rows " + std::to_string(y) + ".." +
                               std::to_string(y + rows - 1));
       }
+      if (!refine) result.timings.culledRows += lastCulledRows_;
       double bandWallMs = msSince(bandStart);
       double bandGpuMs = bandWallMs;
       if (timestamps_) {
@@ -542,6 +559,26 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
                                         specializationFor(current_, settings, quiet, center, false), reused);
     if (!reused) lastPipelineMs_ += quietSamplePipeline_->creationMs();
   }
+  fillPipeline_ = nullptr;
+  quietFillPipeline_ = nullptr;
+  if (options.cullRows && options.kernel == Kernel::Shade) {
+    // The sample pipelines' twins that write the background: their kernels are the prologue and the
+    // image write only, and compile in a fraction of the time.
+    auto fillFor = [&](const RenderOptions& o) {
+      vulkan::Specialization spec = specializationFor(current_, settings, o, center, false);
+      spec.set(gpu::kSpecFillBackground, true);
+      const vulkan::ComputePipeline* p = &pipelineFor(options.kernel, settings.precision, spec, reused);
+      if (!reused) lastPipelineMs_ += p->creationMs();
+      return p;
+    };
+    fillPipeline_ = fillFor(options);
+    quietFillPipeline_ = fillPipeline_;
+    if (quietSamplePipeline_ != samplePipeline_) {
+      RenderOptions quiet = options;
+      quiet.countStats = false;
+      quietFillPipeline_ = fillFor(quiet);
+    }
+  }
   refinePipeline_ = nullptr;
   if (adaptive) {
     refinePipeline_ = &pipelineFor(options.kernel, settings.precision,
@@ -575,7 +612,8 @@ void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t s
   push.sampleBase = sampleBase;
   push.sampleCount = count;
   push.flags = accumulate ? gpu::kFlagAccumulate : 0u;
-  recordDispatch(cmd, countRays ? *samplePipeline_ : *quietSamplePipeline_, push, false);
+  recordDispatch(cmd, countRays ? *samplePipeline_ : *quietSamplePipeline_, push, false,
+                 countRays ? fillPipeline_ : quietFillPipeline_);
 }
 
 vk::Buffer Renderer::imageBuffer() const {

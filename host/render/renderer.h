@@ -16,6 +16,7 @@
 
 #include "image/image.h"
 #include "render/gpu_scene.h"
+#include "render/row_culling.h"
 #include "scene/features.h"
 #include "scene/scene.h"
 #include "vk/buffer.h"
@@ -64,6 +65,9 @@ struct RenderOptions {
   bool progressive = false;    // samples from the per-pixel sequence even at 1 spp (viewer frames)
   bool countStats = true;      // ray counters (a specialization; off costs nothing)
   double bandBudgetMs = 100.0; // target GPU time of one submission (watchdog-safe)
+  // Rows of workgroups whose every eye ray provably meets nothing are filled with the background
+  // instead of traced (render/row_culling.h; the image is the same). Off: --no-row-culling.
+  bool cullRows = true;
   std::function<void(const RenderProgress&)> progress;
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };
@@ -74,6 +78,7 @@ struct RenderTimings {
   double traceWallMs = 0.0; // host wall time of the trace submissions
   double readbackMs = 0.0;
   int bands = 0;
+  std::uint32_t culledRows = 0; // rows of the sample pass filled with the background (row culling)
   bool pipelineReused = false;
 };
 
@@ -115,10 +120,10 @@ public:
   void prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
   void recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count, bool accumulate,
                      bool countRays = true);
-  vk::Buffer imageBuffer() const;         // vec4(sum rgb, samples) per pixel, row-major
-  vk::BufferView imageTexelView() const;  // the same as RGBA32F texels (a storage texel buffer)
-  Image readImage() const;        // averages of the sums (after the recorded work completed)
-  RayStats takeStats();           // reads and zeroes the counters
+  vk::Buffer imageBuffer() const;        // vec4(sum rgb, samples) per pixel, row-major
+  vk::BufferView imageTexelView() const; // the same as RGBA32F texels (a storage texel buffer)
+  Image readImage() const;               // averages of the sums (after the recorded work completed)
+  RayStats takeStats();                  // reads and zeroes the counters
   const Features& currentFeatures() const { return current_; }
   bool usesUniformScene() const { return usesUniformScene_; }
   bool usesUniformShading() const { return usesUniformShading_; }
@@ -137,8 +142,9 @@ private:
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();
+  // fill: the background pipeline for rows that see nothing (row culling), or null to trace all.
   void recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
-                      const gpu::PushConstants& push, bool timestamps);
+                      const gpu::PushConstants& push, bool timestamps, const vulkan::ComputePipeline* fill = nullptr);
   RayStats readStatsAndReset();
 
   const vulkan::Context& context_;
@@ -154,6 +160,10 @@ private:
   const vulkan::ComputePipeline* samplePipeline_ = nullptr;      // pass kPassSample
   const vulkan::ComputePipeline* quietSamplePipeline_ = nullptr; // the same without counters
   const vulkan::ComputePipeline* refinePipeline_ = nullptr;      // adaptive AA's refine pass
+  const vulkan::ComputePipeline* fillPipeline_ = nullptr;        // samplePipeline_ filling culled rows
+  const vulkan::ComputePipeline* quietFillPipeline_ = nullptr;   // quietSamplePipeline_'s
+  std::uint32_t lastCulledRows_ = 0; // rows the last recordDispatch filled instead of traced
+  CullScene cull_;                                               // the frame's camera and scene, for culling
 
   GpuScene gpuScene_;
   Features features_; // scene facts; settings applied per render into current_

@@ -288,6 +288,7 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   RenderOptions options;
   options.progressive = true;
   options.specialize = o_.specialize;
+  options.cullRows = o_.cullRows;
   options.countStats = settings_.countStats;
   renderer_.prepare(camera_.camera(), r, options);
   presenter_.bind(renderer_.imageBuffer(), renderer_.imageTexelView(), size);

@@ -51,6 +51,7 @@ struct ViewerOptions {
   bool syncValidate = false;
   bool pipelineCache = true;
   bool specialize = true;
+  bool cullRows = true; // RenderOptions::cullRows
 
   bool vsync = true;
   bool directResolve = true;                // the resolve pass writes the swapchain image where it can (presenter.h)
