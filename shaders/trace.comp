@@ -21,9 +21,6 @@ layout(binding = kBindingPrevImage, rgba32f) uniform readonly restrict imageBuff
 layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 layout(constant_id = kSpecRefinePass) const bool REFINE_PASS = false;
-// The host proved that every eye ray of the dispatch meets nothing (host/render/row_culling.h): each
-// sample is the background, with the same arithmetic and counters as a traced miss.
-layout(constant_id = kSpecFillBackground) const bool FILL_BACKGROUND = false;
 
 // Per-invocation counters (gShadowRays lives in shade.glsl).
 uint gEyeRays = 0u;
@@ -72,10 +69,6 @@ bool worthTracing(vec3 weight) {
 // kMaxStackSize; deeper trees drop and count the extra branches).
 vec3 traceRadiance(vec3 origin, vec3 dir) {
   vec3 radiance = vec3(0.0);
-  if (FILL_BACKGROUND) {
-    countRay(kRayEye, 0u);
-    return radiance + vec3(1.0) * frame.background.rgb; // as the loop adds a miss of weight 1
-  }
   PendingRay stack[STACK_SIZE];
   int sp = 0;
   PendingRay cur = PendingRay(origin, kRayEye << 16u, dir, vec3(1.0), kEmptyMedia);

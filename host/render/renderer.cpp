@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "fill_spv.h"    // kFillSpv: shaders/fill.comp, row culling's background fill
 #include "hits_spv.h"    // kHitsSpv: shaders/hits.comp, the ray queries alone
 #include "trace64_spv.h" // kTrace64Spv: the same, intersecting in double (-DVKRAY_FLOAT64)
 #include "trace_spv.h"   // kTraceSpv: shaders/trace.comp compiled at build time
@@ -562,22 +563,23 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   fillPipeline_ = nullptr;
   quietFillPipeline_ = nullptr;
   if (options.cullRows && options.kernel == Kernel::Shade) {
-    // The sample pipelines' twins that write the background: their kernels are the prologue and the
-    // image write only, and compile in a fraction of the time.
-    auto fillFor = [&](const RenderOptions& o) {
-      vulkan::Specialization spec = specializationFor(current_, settings, o, center, false);
-      spec.set(gpu::kSpecFillBackground, true);
-      const vulkan::ComputePipeline* p = &pipelineFor(options.kernel, settings.precision, spec, reused);
-      if (!reused) lastPipelineMs_ += p->creationMs();
-      return p;
+    // The background fill for culled rows (shaders/fill.comp): one per counting mode, whatever the
+    // scene, built on first use.
+    auto fillFor = [&](bool count) -> const vulkan::ComputePipeline* {
+      std::unique_ptr<vulkan::ComputePipeline>& p = fillPipelines_[count ? 1 : 0];
+      if (!p) {
+        vulkan::Specialization spec;
+        spec.set(gpu::kSpecCountStats, count);
+        p = std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kFillSpv),
+                                                      *pipelineLayout_, spec, cache_ ? &cache_->cache() : nullptr,
+                                                      "fill");
+        lastPipelineMs_ += p->creationMs();
+        if (cache_) cache_->save();
+      }
+      return p.get();
     };
-    fillPipeline_ = fillFor(options);
-    quietFillPipeline_ = fillPipeline_;
-    if (quietSamplePipeline_ != samplePipeline_) {
-      RenderOptions quiet = options;
-      quiet.countStats = false;
-      quietFillPipeline_ = fillFor(quiet);
-    }
+    fillPipeline_ = fillFor(options.countStats);
+    quietFillPipeline_ = quietSamplePipeline_ != samplePipeline_ ? fillFor(false) : fillPipeline_;
   }
   refinePipeline_ = nullptr;
   if (adaptive) {

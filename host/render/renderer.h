@@ -3,6 +3,7 @@
 // The headless command and the viewer both drive this one class.
 #pragma once
 
+#include <array>
 #include <atomic>
 #include <cstdint>
 #include <functional>
@@ -157,13 +158,14 @@ private:
   vk::raii::DescriptorSet descriptorSet_{nullptr};
   vk::raii::QueryPool queryPool_{nullptr};
   std::map<std::tuple<Kernel, Precision, vulkan::Specialization>, std::unique_ptr<vulkan::ComputePipeline>> pipelines_;
-  const vulkan::ComputePipeline* samplePipeline_ = nullptr;      // pass kPassSample
-  const vulkan::ComputePipeline* quietSamplePipeline_ = nullptr; // the same without counters
-  const vulkan::ComputePipeline* refinePipeline_ = nullptr;      // adaptive AA's refine pass
-  const vulkan::ComputePipeline* fillPipeline_ = nullptr;        // samplePipeline_ filling culled rows
-  const vulkan::ComputePipeline* quietFillPipeline_ = nullptr;   // quietSamplePipeline_'s
+  const vulkan::ComputePipeline* samplePipeline_ = nullptr;               // pass kPassSample
+  const vulkan::ComputePipeline* quietSamplePipeline_ = nullptr;          // the same without counters
+  const vulkan::ComputePipeline* refinePipeline_ = nullptr;               // adaptive AA's refine pass
+  std::array<std::unique_ptr<vulkan::ComputePipeline>, 2> fillPipelines_; // shaders/fill.comp, [counting]
+  const vulkan::ComputePipeline* fillPipeline_ = nullptr;                 // samplePipeline_'s fill for culled rows
+  const vulkan::ComputePipeline* quietFillPipeline_ = nullptr;            // quietSamplePipeline_'s
   std::uint32_t lastCulledRows_ = 0; // rows the last recordDispatch filled instead of traced
-  CullScene cull_;                                               // the frame's camera and scene, for culling
+  CullScene cull_;                   // the frame's camera and scene, for culling
 
   GpuScene gpuScene_;
   Features features_; // scene facts; settings applied per render into current_

@@ -91,10 +91,7 @@ VKRAY_CONST(uint, kSpecRefinePass, 23u);
 VKRAY_CONST(uint, kSpecShadingInUbo, 24u);
 // Materials up to kMaxUnrolledCount are read into registers (scene.glsl, loadSceneRegisters).
 VKRAY_CONST(uint, kSpecMaterialCount, 25u);
-// Every eye ray of the dispatch is known to miss (host/render/row_culling.h): write the background
-// without tracing.
-VKRAY_CONST(uint, kSpecFillBackground, 26u);
-VKRAY_CONST(uint, kSpecCount, 27u);
+VKRAY_CONST(uint, kSpecCount, 26u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
