@@ -3,7 +3,7 @@
 // On CPU drivers a SIMD group of 8 pixels pays for the whole Whitted loop body even when every one
 // of its eye rays misses (docs/performance.md, "Why lavapipe needs this"), so the sky above a
 // scene costs as much per pixel as a lit floor. The Renderer fills rows of workgroups whose every
-// eye ray misses everything with a pipeline that writes the background (kSpecFillBackground) and
+// eye ray misses everything with a kernel that writes the background (shaders/fill.comp) and
 // traces only the others. The test is conservative: a row is empty only when the pyramid from the
 // eye through the row, one pixel wider on every side than its pixels, misses the box of every
 // bounded primitive and every plane with margins far above float rounding, so every eye ray the
