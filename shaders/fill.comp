@@ -21,8 +21,6 @@ layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 layout(constant_id = kSpecCountStats) const bool COUNT_STATS = true;
 
-bool isFiniteRgb(vec3 v) { return !any(isnan(v)) && !any(isinf(v)); }
-
 void main() {
   gDynamicZero = stats.pad0; // push-constant values pass through opaqueUniform (common.glsl)
   vec3 background = frame.background.rgb;
@@ -34,7 +32,7 @@ void main() {
   uint eyeRays = 0u;
   if (inside) {
     vec3 radiance = vec3(0.0) + vec3(1.0) * background;
-    if (!isFiniteRgb(radiance)) radiance = vec3(0.0);
+    if (!isFiniteVec(radiance)) radiance = vec3(0.0); // as trace.comp's traceSample
     vec3 sum = vec3(0.0);
     for (uint k = 0u; k < samples; ++k) sum += radiance;
     eyeRays = samples;

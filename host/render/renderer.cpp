@@ -247,12 +247,17 @@ const vulkan::ComputePipeline& Renderer::pipelineFor(Kernel kernel, Precision pr
                                           : f64                  ? std::span<const std::uint32_t>(kTrace64Spv)
                                                                  : std::span<const std::uint32_t>(kTraceSpv);
     const char* name = kernel == Kernel::Hits ? "hits" : f64 ? "trace (float64)" : "trace";
-    auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, code, *pipelineLayout_, spec,
-                                                              cache_ ? &cache_->cache() : nullptr, name);
-    it = pipelines_.emplace(key, std::move(pipeline)).first;
-    if (cache_) cache_->save();
+    it = pipelines_.emplace(key, buildPipeline(code, spec, name)).first;
   }
   return *it->second;
+}
+
+std::unique_ptr<vulkan::ComputePipeline> Renderer::buildPipeline(std::span<const std::uint32_t> code,
+                                                                 const vulkan::Specialization& spec, const char* name) {
+  auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, code, *pipelineLayout_, spec,
+                                                            cache_ ? &cache_->cache() : nullptr, name);
+  if (cache_) cache_->save();
+  return pipeline;
 }
 
 void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev) {
@@ -327,8 +332,9 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   frameHeight_ = s.height;
 }
 
-void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
-                              const gpu::PushConstants& push, bool timestamps, const vulkan::ComputePipeline* fill) {
+std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
+                                       const gpu::PushConstants& push, bool timestamps,
+                                       const vulkan::ComputePipeline* fill) {
   // Row culling: the dispatch's rows in runs of whole workgroup rows, each traced or filled.
   std::vector<RowRun> runs;
   if (fill != nullptr) {
@@ -336,8 +342,8 @@ void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::
   } else {
     runs.push_back({push.tileOrigin.y, push.tileSize.y, false});
   }
-  lastCulledRows_ = 0;
-  for (const RowRun& run : runs) lastCulledRows_ += run.empty ? run.rows : 0;
+  std::uint32_t culled = 0;
+  for (const RowRun& run : runs) culled += run.empty ? run.rows : 0;
   cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *queryPool_, 0);
   // One dispatch per sample, each adding to the sums of the one before. llvmpipe (lavapipe) stops
@@ -371,6 +377,7 @@ void Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::
     }
   }
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eBottomOfPipe, *queryPool_, 1);
+  return culled;
 }
 
 RayStats Renderer::readStatsAndReset() {
@@ -463,11 +470,12 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       auto bandStart = Clock::now();
       std::string step = std::string(refine ? "refining" : "tracing") + " rows " + std::to_string(y) + ".." +
                          std::to_string(y + rows - 1);
+      std::uint32_t culled = 0;
       try {
         context_.submitAndWait(step, [&](const vk::raii::CommandBuffer& cmd) {
           if (timestamps_) cmd.resetQueryPool(*queryPool_, 0, 2);
-          recordDispatch(cmd, refine ? *refinePipeline_ : *samplePipeline_, push, timestamps_,
-                         refine ? nullptr : fillPipeline_);
+          culled = recordDispatch(cmd, refine ? *refinePipeline_ : *samplePipeline_, push, timestamps_,
+                                  refine ? nullptr : fillPipeline_);
           // Shader writes must be visible to the host's mapped reads (or the readback copy).
           vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
                                     vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
@@ -479,7 +487,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
         throw DeviceLostError(std::string(e.what()) + " in the band of rows " + std::to_string(y) + ".." +
                               std::to_string(y + rows - 1));
       }
-      if (!refine) result.timings.culledRows += lastCulledRows_;
+      result.timings.culledRows += culled; // the refine pass culls nothing
       double bandWallMs = msSince(bandStart);
       double bandGpuMs = bandWallMs;
       if (timestamps_) {
@@ -570,11 +578,8 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
       if (!p) {
         vulkan::Specialization spec;
         spec.set(gpu::kSpecCountStats, count);
-        p = std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kFillSpv),
-                                                      *pipelineLayout_, spec, cache_ ? &cache_->cache() : nullptr,
-                                                      "fill");
+        p = buildPipeline(kFillSpv, spec, "fill");
         lastPipelineMs_ += p->creationMs();
-        if (cache_) cache_->save();
       }
       return p.get();
     };

@@ -143,9 +143,14 @@ private:
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();
+  // A pipeline from SPIR-V and a specialization, with the on-disk cache when there is one.
+  std::unique_ptr<vulkan::ComputePipeline> buildPipeline(std::span<const std::uint32_t> code,
+                                                         const vulkan::Specialization& spec, const char* name);
   // fill: the background pipeline for rows that see nothing (row culling), or null to trace all.
-  void recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
-                      const gpu::PushConstants& push, bool timestamps, const vulkan::ComputePipeline* fill = nullptr);
+  // Returns how many rows went to `fill`.
+  std::uint32_t recordDispatch(const vk::raii::CommandBuffer& cmd, const vulkan::ComputePipeline& pipeline,
+                               const gpu::PushConstants& push, bool timestamps,
+                               const vulkan::ComputePipeline* fill = nullptr);
   RayStats readStatsAndReset();
 
   const vulkan::Context& context_;
@@ -164,8 +169,7 @@ private:
   std::array<std::unique_ptr<vulkan::ComputePipeline>, 2> fillPipelines_; // shaders/fill.comp, [counting]
   const vulkan::ComputePipeline* fillPipeline_ = nullptr;                 // samplePipeline_'s fill for culled rows
   const vulkan::ComputePipeline* quietFillPipeline_ = nullptr;            // quietSamplePipeline_'s
-  std::uint32_t lastCulledRows_ = 0; // rows the last recordDispatch filled instead of traced
-  CullScene cull_;                   // the frame's camera and scene, for culling
+  CullScene cull_;                                                        // the frame's camera and scene, for culling
 
   GpuScene gpuScene_;
   Features features_; // scene facts; settings applied per render into current_
