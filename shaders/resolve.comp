@@ -8,7 +8,7 @@
 
 #include "shared/resolve_types.h"
 
-layout(local_size_x = kResolveGroupX, local_size_y = kResolveGroupY, local_size_z = 1) in;
+layout(local_size_x = kResolveGroupX, local_size_x_id = kResolveSpecGroupX, local_size_y = 1, local_size_z = 1) in;
 
 layout(constant_id = kResolveSpecEncodeSrgb) const bool ENCODE_SRGB = true;
 

@@ -44,16 +44,34 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
                                       vk::SamplerAddressMode::eClampToEdge, vk::SamplerAddressMode::eClampToEdge,
                                       vk::SamplerAddressMode::eClampToEdge));
   });
+  cache_ = cache;
+  encodeSrgb_ = encodeSrgb;
+  allowDirect_ = allowDirect && context.storageWriteWithoutFormatEnabled();
+  buildPipelines(gpu::kResolveGroupX);
+}
+
+// One image row per workgroup where the device allows (resolve_types.h), in whole SIMD batches.
+std::uint32_t Presenter::groupWidthFor(std::uint32_t width) const {
+  const vulkan::DeviceInfo& info = context_.info();
+  std::uint32_t limit = std::min(info.maxComputeWorkGroupSizeX, info.maxComputeWorkGroupInvocations);
+  std::uint32_t rounded = (width + 7u) / 8u * 8u;
+  return std::max(1u, std::min(rounded, limit));
+}
+
+void Presenter::buildPipelines(std::uint32_t groupX) {
   vulkan::Specialization spec;
-  spec.set(gpu::kResolveSpecEncodeSrgb, encodeSrgb);
-  pipeline_ =
-      std::make_unique<vulkan::ComputePipeline>(context, std::span<const std::uint32_t>(kResolveSpv), *pipelineLayout_,
-                                                spec, cache ? &cache->cache() : nullptr, "resolve");
-  if (allowDirect && context.storageWriteWithoutFormatEnabled()) {
+  spec.set(gpu::kResolveSpecEncodeSrgb, encodeSrgb_);
+  spec.set(gpu::kResolveSpecGroupX, groupX);
+  const vk::raii::PipelineCache* cache = cache_ ? &cache_->cache() : nullptr;
+  pipeline_.reset();
+  directPipeline_.reset();
+  pipeline_ = std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kResolveSpv),
+                                                        *pipelineLayout_, spec, cache, "resolve");
+  if (allowDirect_) {
     directPipeline_ = std::make_unique<vulkan::ComputePipeline>(
-        context, std::span<const std::uint32_t>(kResolveDirectSpv), *pipelineLayout_, spec,
-        cache ? &cache->cache() : nullptr, "direct resolve");
+        context_, std::span<const std::uint32_t>(kResolveDirectSpv), *pipelineLayout_, spec, cache, "direct resolve");
   }
+  groupX_ = groupX;
 }
 
 void Presenter::attach(const Swapchain& swapchain, vk::ImageView overlayLayer) {
@@ -109,6 +127,7 @@ void Presenter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size
   vulkan::vulkanStep("sizing the viewer's display images", [&] {
     sums_ = sums;
     sumsView_ = sumsView;
+    if (groupWidthFor(size.width) != groupX_) buildPipelines(groupWidthFor(size.width));
     if (size != size_) {
       display_ = DeviceImage();
       display_ = makeDeviceImage(context_, kDisplayFormat,
@@ -143,8 +162,7 @@ void Presenter::recordResolve(const vk::raii::CommandBuffer& cmd, const Target& 
   cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0,
                          {toSwapchain ? *directSets_[target.index] : *set_}, {});
   // Round up: the shader bounds-checks the partial workgroups at the edges.
-  cmd.dispatch((size_.width + gpu::kResolveGroupX - 1) / gpu::kResolveGroupX,
-               (size_.height + gpu::kResolveGroupY - 1) / gpu::kResolveGroupY, 1);
+  cmd.dispatch((size_.width + groupX_ - 1) / groupX_, size_.height, 1);
 }
 
 void Presenter::recordBlit(const vk::raii::CommandBuffer& cmd, const Target& target) const {

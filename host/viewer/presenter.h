@@ -75,6 +75,12 @@ private:
   vk::raii::DescriptorPool directPool_{nullptr};            // one set per swapchain image
   std::vector<vk::raii::DescriptorSet> directSets_;
   void writeSums(); // the sums' view into every set
+  std::uint32_t groupWidthFor(std::uint32_t width) const;
+  void buildPipelines(std::uint32_t groupX); // both variants, `groupX` invocations wide
+  vulkan::PipelineCache* cache_ = nullptr;
+  bool encodeSrgb_ = true;
+  bool allowDirect_ = false;
+  std::uint32_t groupX_ = 0; // the pipelines' workgroup width
 
   vk::raii::Sampler layerSampler_{nullptr}; // nearest: the layer is read texel for texel
   DeviceImage display_;                     // resolved colour, the blit's source (blit path)

@@ -82,6 +82,8 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   info.maxComputeWorkGroupCount[1] = props.limits.maxComputeWorkGroupCount[1];
   info.maxComputeWorkGroupCount[2] = props.limits.maxComputeWorkGroupCount[2];
   info.maxPushConstantsSize = props.limits.maxPushConstantsSize;
+  info.maxComputeWorkGroupSizeX = props.limits.maxComputeWorkGroupSize[0];
+  info.maxComputeWorkGroupInvocations = props.limits.maxComputeWorkGroupInvocations;
   auto maint3 = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceMaintenance3Properties>();
   info.maxMemoryAllocationSize = maint3.get<vk::PhysicalDeviceMaintenance3Properties>().maxMemoryAllocationSize;
   return info;

@@ -39,6 +39,8 @@ struct DeviceInfo {
   std::uint64_t maxTexelBufferElements = 0;
   std::uint64_t maxMemoryAllocationSize = 0;
   std::uint32_t maxComputeWorkGroupCount[3] = {0, 0, 0};
+  std::uint32_t maxComputeWorkGroupSizeX = 0;
+  std::uint32_t maxComputeWorkGroupInvocations = 0;
   std::uint32_t maxPushConstantsSize = 0;
 };
 
