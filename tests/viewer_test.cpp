@@ -370,7 +370,7 @@ double statValue(const std::string& out, const std::string& name) {
 }
 
 // The viewer counts rays in a sample of its frames (the first traced frame of each half-second
-// interval and every 8th one) through the counting pipeline, and traces the others with the same
+// interval and every 16th one) through the counting pipeline, and traces the others with the same
 // kernel built without counters. Its "rays per frame" is the counted frames' average, and must
 // match a headless render's rays per sample within 1 %: frames differ only in where each pixel's
 // jittered sample falls, which moved 0.07 % of the rays at this size. Dividing by every frame

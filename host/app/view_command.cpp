@@ -26,7 +26,7 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
       ->check(CLI::IsMember({1.0, 0.5, 0.25}));
   cmd->add_flag("--no-overlay", a.noOverlay, "start with the overlay hidden (H shows it)");
   cmd->add_flag("--no-ray-counts", a.noRayCounts,
-                "start with the ray counters off (on, they count one frame in 8, which costs 10-20 % more)");
+                "start with the ray counters off (on, they count one frame in 16, which costs 10-20 % more)");
   cmd->add_flag("--no-specialize", a.noSpecialize, "compile every feature in (for comparison)");
   cmd->add_flag("--no-row-culling", a.noRowCulling, "trace rows that provably see nothing (for comparison)");
   cmd->add_flag("--no-direct-resolve", a.noDirectResolve,
