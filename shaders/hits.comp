@@ -23,7 +23,7 @@ layout(push_constant) uniform Push { PushConstants pc; };
 void main() {
   gDynamicZero = stats.pad0;
   loadSceneRegisters(); // before any branch (scene.glsl)
-  uvec2 local = gl_GlobalInvocationID.xy;
+  uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (scene.glsl)
   uvec2 pixel = pc.tileOrigin + local;
   if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize.xy))) return;
 

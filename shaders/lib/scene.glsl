@@ -237,6 +237,17 @@ TraceRay makeTraceRay(vec3 origin, vec3 dir) {
   return r;
 }
 
+// This invocation's pixel in the dispatch (before the tile's origin). lavapipe runs a workgroup as
+// SIMD batches of 8 consecutive invocations, rows of the 8 x 8 group; each batch takes a 4 x 2 block
+// of pixels instead of a row of 8, so that its lanes' rays stay closer together and walk, hit and
+// bounce more alike (docs/performance.md, "Pixel blocks"). The workgroup covers the same 8 x 8
+// pixels (row culling's unit), and no pixel's value depends on which lane traces it.
+uvec2 invocationPixel() {
+  uvec2 l = gl_LocalInvocationID.xy;
+  uvec2 inGroup = uvec2((l.x & 3u) + 4u * (l.y & 1u), 2u * (l.y >> 1u) + (l.x >> 2u));
+  return gl_WorkGroupID.xy * uvec2(kWorkgroupSizeX, kWorkgroupSizeY) + inGroup;
+}
+
 // Eye ray through a point of the image plane given in pixels (x right, y down, (0,0) top-left).
 vec3 eyeRayDir(vec2 pixelPos) {
   vec2 size = vec2(frame.imageSize.xy);
