@@ -47,7 +47,7 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
   cache_ = cache;
   encodeSrgb_ = encodeSrgb;
   allowDirect_ = allowDirect && context.storageWriteWithoutFormatEnabled();
-  buildPipelines(gpu::kResolveGroupX);
+  // The pipelines depend on the image's width: built by the first bind().
 }
 
 // One image row per workgroup where the device allows (resolve_types.h), in whole SIMD batches.
@@ -82,7 +82,7 @@ void Presenter::attach(const Swapchain& swapchain, vk::ImageView overlayLayer) {
   context_.device().updateDescriptorSets(vk::WriteDescriptorSet(*set_, gpu::kResolveBindingOverlay, 0, 1,
                                                                 vk::DescriptorType::eCombinedImageSampler, &layerInfo),
                                          {});
-  if (!directPipeline_ || !swapchain.storable() || swapchain.imageCount() == 0) return;
+  if (!allowDirect_ || !swapchain.storable() || swapchain.imageCount() == 0) return;
   const auto& device = context_.device();
   vulkan::vulkanStep("creating the viewer's direct resolve sets", [&] {
     const auto n = static_cast<std::uint32_t>(swapchain.imageCount());
@@ -127,7 +127,8 @@ void Presenter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size
   vulkan::vulkanStep("sizing the viewer's display images", [&] {
     sums_ = sums;
     sumsView_ = sumsView;
-    if (groupWidthFor(size.width) != groupX_) buildPipelines(groupWidthFor(size.width));
+    const std::uint32_t groupX = groupWidthFor(size.width);
+    if (groupX != groupX_) buildPipelines(groupX);
     if (size != size_) {
       display_ = DeviceImage();
       display_ = makeDeviceImage(context_, kDisplayFormat,

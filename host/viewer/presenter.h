@@ -28,8 +28,9 @@ public:
   Presenter(const vulkan::Context& context, vulkan::PipelineCache* cache, bool encodeSrgb, bool allowDirect = true);
 
   // Points the resolve pass at the Renderer's image (width x height sums: the buffer, and its
-  // RGBA32F texel view) and sizes the display image. Only while no recorded frame is pending: it
-  // rewrites the descriptor sets.
+  // RGBA32F texel view), sizes the display image and, for a new width, builds the pipelines (their
+  // workgroups are a row wide). Only while no recorded frame is pending: it rewrites the descriptor
+  // sets.
   void bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size);
   // Builds the direct path's descriptor sets for the swapchain's images (none when it is not
   // storable), with the overlay's layer (a sampled image of the swapchain's size and format, in
@@ -80,7 +81,7 @@ private:
   vulkan::PipelineCache* cache_ = nullptr;
   bool encodeSrgb_ = true;
   bool allowDirect_ = false;
-  std::uint32_t groupX_ = 0; // the pipelines' workgroup width
+  std::uint32_t groupX_ = 0; // the pipelines' workgroup width (0: none built yet)
 
   vk::raii::Sampler layerSampler_{nullptr}; // nearest: the layer is read texel for texel
   DeviceImage display_;                     // resolved colour, the blit's source (blit path)
