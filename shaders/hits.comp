@@ -26,10 +26,11 @@ void main() {
   uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (scene.glsl)
   uvec2 pixel = pc.tileOrigin + local;
   if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize.xy))) return;
+  loadEntryPoints(pixel, pc.imageRow0);
 
   vec3 dir = eyeRayDir(vec2(pixel) + 0.5);
   TraceRay r = makeTraceRay(frame.cameraOrigin.xyz, dir);
-  Hit h = traceScene(r, kInfinity, false, false);
+  Hit h = traceScene(r, kInfinity, false, false, true);
   vec4 result = vec4(-1.0, float(h.kind), float(h.index), -1.0);
   if (h.kind != kNoHit) {
     result.x = h.t;
@@ -41,7 +42,7 @@ void main() {
         vec3 origin = ROBUST ? spawnOrigin(s.p, ng, s.errorBound) : s.p; // as localShade (shade.glsl)
         vec3 toLight = lightPos - origin;
         float dist = length(toLight);
-        Hit blocker = traceScene(makeTraceRay(origin, toLight / dist), dist, true, true);
+        Hit blocker = traceScene(makeTraceRay(origin, toLight / dist), dist, true, true, false);
         result.w = blocker.kind == kNoHit ? 0.0 : 1.0;
       }
     }

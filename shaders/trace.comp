@@ -83,7 +83,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
     uint depth = cur.depthKind & 0xFFFFu;
     countRay(cur.depthKind >> 16u, depth);
     TraceRay r = makeTraceRay(cur.origin, cur.dir);
-    Hit hit = traceScene(r, kInfinity, false, false);
+    Hit hit = traceScene(r, kInfinity, false, false, depth == 0u); // depth 0: the eye ray
     vec3 w = cur.weight;
     uint medium = REFRACTION ? mediaTop(cur.media) : kNoMedium;
     if (REFRACTION && medium != kNoMedium) w *= beerLambert(loadMaterial(medium).absorption.rgb, hit.t);
@@ -267,6 +267,7 @@ void main() {
   // but still take part in flushStats' subgroup sums.
   bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize.xy));
   if (inside) {
+    loadEntryPoints(pixel, pc.imageRow0);
     uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
     uint slot = (pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x;
     if (REFINE_PASS) {

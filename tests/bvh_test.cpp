@@ -668,5 +668,70 @@ TEST(GpuBvh, QueryKernelAgreesWithTheRenderer) {
   EXPECT_LE(blocked - drawnInShadow, blocked / 100) << blocked << " blocked, " << drawnInShadow << " drawn dark";
 }
 
+// Eye rays that start at their tile's entry points (shaders/entry.comp) find exactly the hits of a
+// walk from the root: the same hit or miss, the same distance bit for bit, the same kind of
+// primitive, in every pixel. Views chosen to stress the tiles' frusta: partial tiles at the image's
+// edges, a wide and a narrow field of view, the eye inside a closed mesh (every tile reaches
+// geometry all around), the eye away from the frame the scene was packed in (the viewer's case),
+// and a band split (the first band's tiles are numbered from its own first row).
+TEST(GpuBvh, EntryPointsFindTheSameHitsAsTheRoot) {
+  auto tris = torus(48, 24);
+  struct View {
+    const char* name;
+    glm::dvec3 eye, lookAt;
+    double fovY;
+    std::uint32_t width, height;
+    bool moveAfterUpload; // render from `eye` after uploading the scene for the default camera
+  };
+  const View views[] = {
+      {"default", {1.0, 6.0, 9.0}, {0.0, 0.0, 0.0}, 50.0, 96, 72, false},
+      {"partial tiles, wide", {0.5, 2.0, 2.5}, {0.0, 0.0, 0.0}, 150.0, 101, 37, false},
+      {"narrow", {1.0, 6.0, 9.0}, {3.0, 0.0, 0.0}, 4.0, 64, 64, false},
+      {"inside the tube", {0.0, 0.0, 3.0}, {1.0, 0.0, 3.0}, 90.0, 80, 60, false},
+      {"eye moved after upload", {-5.0, 2.0, 4.0}, {0.0, 0.0, 0.0}, 60.0, 96, 72, true},
+      {"bands", {1.0, 6.0, 9.0}, {0.0, 0.0, 0.0}, 4.0, 2100, 44, false}, // first band: 32 rows
+  };
+  Renderer& renderer = test::renderer();
+  for (const View& v : views) {
+    SCOPED_TRACE(v.name);
+    Scene scene = idScene(tris, true, BvhMode::On);
+    scene.render.width = v.width;
+    scene.render.height = v.height;
+    Camera camera = scene.camera;
+    camera.position = v.eye;
+    camera.lookAt = v.lookAt;
+    camera.fovY = v.fovY;
+    if (!v.moveAfterUpload) scene.camera = camera;
+    renderer.setScene(scene);
+    RenderOptions from;
+    from.kernel = Kernel::Hits;
+    RenderOptions root = from;
+    root.entryPoints = false;
+    RenderResult a = renderer.render(camera, scene.render, from);
+    RenderResult b = renderer.render(camera, scene.render, root);
+    // The same in bands of 8 rows after the first (a budget no measured band meets).
+    RenderOptions banded = from;
+    banded.bandBudgetMs = 1e-3;
+    RenderResult c = renderer.render(camera, scene.render, banded);
+    test::expectNoValidationMessages();
+    if (v.width > 1000) EXPECT_EQ(c.timings.bands, 3);
+    ASSERT_EQ(a.hits.size(), b.hits.size());
+    ASSERT_EQ(c.hits.size(), b.hits.size());
+    std::size_t hits = 0;
+    for (std::size_t i = 0; i < b.hits.size(); ++i) {
+      for (const RenderResult* r : {&a, &c}) {
+        const glm::vec4& h = r->hits[i];
+        const glm::vec4& want = b.hits[i];
+        ASSERT_EQ(std::memcmp(&h.x, &want.x, sizeof(float)), 0)
+            << "pixel " << i << ": t " << h.x << " from the entry points, " << want.x << " from the root";
+        ASSERT_EQ(h.y, want.y) << "pixel " << i << ": another kind of primitive";
+        ASSERT_EQ(h.w, want.w) << "pixel " << i << ": the shadow ray decided otherwise";
+      }
+      hits += b.hits[i].x > 0.0f;
+    }
+    EXPECT_GT(hits, b.hits.size() / 10) << "the view must show the scene";
+  }
+}
+
 } // namespace
 } // namespace vkray

@@ -324,6 +324,7 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
   options.countStats = false;
   // Embree traces every eye ray, the background's too: so does the renderer's column here.
   options.cullRows = false;
+  options.entryPoints = !args.noEntryPoints;
   std::vector<Row> rows;
   for (std::size_t size : args.sizes) {
     MeshData mesh = proceduralTorus(size);

@@ -17,7 +17,8 @@ struct BenchMeshesArgs {
   std::uint32_t height = 600;
   int runs = 5;
   bool noEmbree = false;
-  std::filesystem::path csv; // also write the table here (for tools/plot-mesh-bench)
+  bool noEntryPoints = false; // eye rays walk from the root (RenderOptions::entryPoints)
+  std::filesystem::path csv;  // also write the table here (for tools/plot-mesh-bench)
   DeviceFlags device;
 };
 

@@ -20,6 +20,7 @@ struct RenderArgs {
   bool quiet = false;
   bool noSpecialize = false;
   bool noRowCulling = false;
+  bool noEntryPoints = false;
   double bandMs = 100.0;
   std::string sceneMemory = "auto";
 };

@@ -26,6 +26,9 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--no-specialize", render.noSpecialize, "compile every feature in (for comparison)");
   renderCmd->add_flag("--no-row-culling", render.noRowCulling,
                       "trace rows whose eye rays provably miss everything instead of filling them (for comparison)");
+  renderCmd->add_flag(
+      "--no-entry-points", render.noEntryPoints,
+      "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
   renderCmd->add_option("--band-ms", render.bandMs, "target GPU time per submission in ms (watchdog safety)")
       ->check(realRange(1.0, 10000.0));
   renderCmd
@@ -69,6 +72,8 @@ int main(int argc, char** argv) {
   benchMeshesCmd->add_option("--height", benchMeshes.height, "image height")->check(CLI::Range(8, 16384));
   benchMeshesCmd->add_option("--runs", benchMeshes.runs, "timed runs per point")->check(CLI::Range(1, 1000));
   benchMeshesCmd->add_flag("--no-embree", benchMeshes.noEmbree, "skip the Embree side");
+  benchMeshesCmd->add_flag("--no-entry-points", benchMeshes.noEntryPoints,
+                           "vkray's eye rays walk the BVH from the root, not from their tile's entry points");
   benchMeshesCmd->add_option("--csv", benchMeshes.csv, "also write the table as CSV (tools/plot-mesh-bench)");
   addDeviceFlags(*benchMeshesCmd, benchMeshes.device);
 

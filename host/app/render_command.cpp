@@ -84,6 +84,7 @@ int runRender(const RenderArgs& args) {
   RenderOptions options;
   options.specialize = !args.noSpecialize;
   options.cullRows = !args.noRowCulling;
+  options.entryPoints = !args.noEntryPoints;
   options.countStats = args.stats;
   options.bandBudgetMs = args.bandMs;
   options.sceneMemory = args.sceneMemory == "uniform"   ? SceneMemory::Uniform

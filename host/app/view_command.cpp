@@ -29,6 +29,8 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
                 "start with the ray counters off (on, they count one frame in 16, which costs 10-20 % more)");
   cmd->add_flag("--no-specialize", a.noSpecialize, "compile every feature in (for comparison)");
   cmd->add_flag("--no-row-culling", a.noRowCulling, "trace rows that provably see nothing (for comparison)");
+  cmd->add_flag("--no-entry-points", a.noEntryPoints,
+                "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
   cmd->add_flag("--no-direct-resolve", a.noDirectResolve,
                 "always resolve into an intermediate image and blit it, even where the window's images could "
                 "be written directly (for comparison)");
@@ -67,6 +69,7 @@ int runView(const ViewArgs& a) {
   o.syncValidate = a.device.syncValidate;
   o.specialize = !a.noSpecialize;
   o.cullRows = !a.noRowCulling;
+  o.entryPoints = !a.noEntryPoints;
   o.directResolve = !a.noDirectResolve;
   o.vsync = !a.noVsync;
   o.renderScale = a.scale;

@@ -22,6 +22,7 @@ struct ViewArgs {
   bool noRayCounts = false;
   bool noSpecialize = false;
   bool noRowCulling = false;
+  bool noEntryPoints = false;
   bool noDirectResolve = false;
   bool stats = false;
   std::uint32_t frames = 0;

@@ -6,6 +6,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "entry_spv.h"   // kEntrySpv: shaders/entry.comp, each tile's BVH entry points
 #include "fill_spv.h"    // kFillSpv: shaders/fill.comp, row culling's background fill
 #include "hits_spv.h"    // kHitsSpv: shaders/hits.comp, the ray queries alone
 #include "trace64_spv.h" // kTrace64Spv: the same, intersecting in double (-DVKRAY_FLOAT64)
@@ -37,7 +38,7 @@ bool isUniformBinding(std::uint32_t b) {
 // the renderer's own, not the scene's.)
 bool isTexelBinding(std::uint32_t b) {
   return b == gpu::kBindingTriangles || b == gpu::kBindingNormals || b == gpu::kBindingBvhNodes ||
-         b == gpu::kBindingPrimRefs;
+         b == gpu::kBindingPrimRefs || b == gpu::kBindingEntryTexels;
 }
 
 // Four storage texel buffers, the least maxPerStageDescriptorStorageImages a device may have.
@@ -104,7 +105,7 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
         vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 4),
         vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
         vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount),
-        vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, 4)};
+        vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, 5)};
     descriptorPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
     vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*descriptorPool_, layouts));
@@ -124,6 +125,9 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
   stats_->write(&zero, sizeof zero);
   prevImage_ = std::make_unique<vulkan::Buffer>(context, sizeof(glm::vec4), kImageTexelFormat,
                                                 vulkan::MemoryUse::DeviceLocal, "previous image (unused)");
+  entryPoints_ = std::make_unique<vulkan::Buffer>(context, 2 * sizeof(glm::uvec4), vk::Format::eR32G32B32A32Uint,
+                                                  vulkan::MemoryUse::DeviceLocal, "entry points (unused)",
+                                                  vk::BufferUsageFlagBits::eStorageBuffer);
   sceneBuffers_.resize(gpu::kBindingCount);
 }
 
@@ -201,6 +205,7 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   spec.set(gpu::kSpecHasTriangles, all || f.triangles);
   spec.set(gpu::kSpecHasPolygons, all || f.polygons);
   spec.set(gpu::kSpecUseBvh, f.useBvh && !gpuScene_.bvh.nodes.empty());
+  spec.set(gpu::kSpecEntryPoints, f.useBvh && !gpuScene_.bvh.nodes.empty() && o.entryPoints);
   spec.set(gpu::kSpecShadows, all || f.shadows);
   spec.set(gpu::kSpecReflection, all || f.reflection);
   spec.set(gpu::kSpecRefraction, all || f.refraction);
@@ -279,6 +284,16 @@ void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool n
                                                   vulkan::MemoryUse::DeviceLocal, "previous image");
     rebuild = true;
   }
+  // Two uvec4 per tile of the window (shaders/entry.comp).
+  vk::DeviceSize tiles = static_cast<vk::DeviceSize>((width + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize) *
+                         ((rows + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize);
+  if (entryPoints_->size() < tiles * 2 * sizeof(glm::uvec4)) {
+    entryPoints_.reset();
+    entryPoints_ = std::make_unique<vulkan::Buffer>(context_, tiles * 2 * sizeof(glm::uvec4),
+                                                    vk::Format::eR32G32B32A32Uint, vulkan::MemoryUse::DeviceLocal,
+                                                    "entry points", vk::BufferUsageFlagBits::eStorageBuffer);
+    rebuild = true;
+  }
   if (rebuild) updateDescriptors();
 }
 
@@ -293,7 +308,7 @@ void Renderer::updateDescriptors() {
       continue;
     }
     if (isTexelBinding(b)) {
-      views[b] = sceneBuffers_[b]->texelView();
+      views[b] = (b == gpu::kBindingEntryTexels ? entryPoints_ : sceneBuffers_[b])->texelView();
       writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, nullptr, &views[b]);
       continue;
     }
@@ -302,6 +317,8 @@ void Renderer::updateDescriptors() {
       handle = frameBuffer_->handle();
     else if (b == gpu::kBindingStats)
       handle = stats_->handle();
+    else if (b == gpu::kBindingEntryPoints)
+      handle = entryPoints_->handle();
     else
       handle = sceneBuffers_[b]->handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
@@ -346,6 +363,20 @@ std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const
   for (const RowRun& run : runs) culled += run.empty ? run.rows : 0;
   cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
   if (timestamps) cmd.writeTimestamp(vk::PipelineStageFlagBits::eTopOfPipe, *queryPool_, 0);
+  if (useEntryPoints_) {
+    // The band's entry points, one invocation per tile, before the passes that read them.
+    gpu::PushConstants band = push;
+    band.tileOrigin = glm::uvec2(0, push.imageRow0);
+    band.tileSize = glm::uvec2(frameWidth_, push.tileOrigin.y + push.tileSize.y - push.imageRow0);
+    std::uint32_t tiles = ((frameWidth_ + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize) *
+                          ((band.tileSize.y + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize);
+    cmd.bindPipeline(vk::PipelineBindPoint::eCompute, entryPipeline_->handle());
+    cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, band);
+    cmd.dispatch((tiles + 63) / 64, 1, 1);
+    vk::MemoryBarrier written(vk::AccessFlagBits::eShaderWrite, vk::AccessFlagBits::eShaderRead);
+    cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {},
+                        written, {}, {});
+  }
   // One dispatch per sample, each adding to the sums of the one before. llvmpipe (lavapipe) stops
   // every loop of an invocation once the loops of its SIMD group have run 65535 iterations in all
   // (LP_MAX_TGSI_LOOP_ITERATIONS, shared by all loops of a shader): 64 samples of a deep glass tree
@@ -585,6 +616,11 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
     };
     fillPipeline_ = fillFor(options.countStats);
     quietFillPipeline_ = quietSamplePipeline_ != samplePipeline_ ? fillFor(false) : fillPipeline_;
+  }
+  useEntryPoints_ = current_.useBvh && options.entryPoints;
+  if (useEntryPoints_ && !entryPipeline_) {
+    entryPipeline_ = buildPipeline(kEntrySpv, vulkan::Specialization(), "entry points");
+    lastPipelineMs_ += entryPipeline_->creationMs();
   }
   refinePipeline_ = nullptr;
   if (adaptive) {

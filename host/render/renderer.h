@@ -69,6 +69,9 @@ struct RenderOptions {
   // Rows of workgroups whose every eye ray provably meets nothing are filled with the background
   // instead of traced (render/row_culling.h; the image is the same). Off: --no-row-culling.
   bool cullRows = true;
+  // Eye rays start their BVH walk at their 8 x 8 tile's entry points, found once per tile by
+  // shaders/entry.comp (the same hits; docs/performance.md, "Entry points"). Off: --no-entry-points.
+  bool entryPoints = true;
   std::function<void(const RenderProgress&)> progress;
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };
@@ -169,6 +172,8 @@ private:
   std::array<std::unique_ptr<vulkan::ComputePipeline>, 2> fillPipelines_; // shaders/fill.comp, [counting]
   const vulkan::ComputePipeline* fillPipeline_ = nullptr;                 // samplePipeline_'s fill for culled rows
   const vulkan::ComputePipeline* quietFillPipeline_ = nullptr;            // quietSamplePipeline_'s
+  std::unique_ptr<vulkan::ComputePipeline> entryPipeline_;                // shaders/entry.comp
+  bool useEntryPoints_ = false;                                           // this render's pipelines read them
   CullScene cull_;                                                        // the frame's camera and scene, for culling
 
   GpuScene gpuScene_;
@@ -181,6 +186,7 @@ private:
   std::unique_ptr<vulkan::Buffer> image_;     // window of imageRows_ rows
   std::unique_ptr<vulkan::Buffer> prevImage_; // refine pass input (or a 16-byte placeholder)
   std::unique_ptr<vulkan::Buffer> stats_;
+  std::unique_ptr<vulkan::Buffer> entryPoints_; // two uvec4 per 8 x 8 tile of the window
   std::uint32_t imageWidth_ = 0;
   std::uint32_t imageRows_ = 0;
   std::uint32_t frameWidth_ = 0;

@@ -289,6 +289,7 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   options.progressive = true;
   options.specialize = o_.specialize;
   options.cullRows = o_.cullRows;
+  options.entryPoints = o_.entryPoints;
   options.countStats = settings_.countStats;
   renderer_.prepare(camera_.camera(), r, options);
   presenter_.bind(renderer_.imageBuffer(), renderer_.imageTexelView(), size);

@@ -51,7 +51,8 @@ struct ViewerOptions {
   bool syncValidate = false;
   bool pipelineCache = true;
   bool specialize = true;
-  bool cullRows = true; // RenderOptions::cullRows
+  bool cullRows = true;    // RenderOptions::cullRows
+  bool entryPoints = true; // RenderOptions::entryPoints
 
   bool vsync = true;
   bool directResolve = true;                // the resolve pass writes the swapchain image where it can (presenter.h)

@@ -98,9 +98,11 @@ vk::DeviceSize checkedTexelBytes(const Context& context, vk::DeviceSize size, vk
 
 } // namespace
 
-Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name)
+Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name,
+               vk::BufferUsageFlags extraUsage)
     : Buffer(context, checkedTexelBytes(context, size, texelFormat, name),
-             vk::BufferUsageFlagBits::eUniformTexelBuffer | vk::BufferUsageFlagBits::eStorageTexelBuffer, use, name) {
+             vk::BufferUsageFlagBits::eUniformTexelBuffer | vk::BufferUsageFlagBits::eStorageTexelBuffer | extraUsage,
+             use, name) {
   vulkanStep("creating the texel view of '" + name_ + "'", [&] {
     view_ =
         vk::raii::BufferView(context.device(), vk::BufferViewCreateInfo({}, *buffer_, texelFormat, 0, VK_WHOLE_SIZE));

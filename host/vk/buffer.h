@@ -25,7 +25,9 @@ public:
   Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use, std::string name);
   // A texel buffer (usable as a uniform or a storage texel buffer) read as texels of `texelFormat`,
   // with its view. More texels than the device's maxTexelBufferElements throws, naming the limit.
-  Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name);
+  // extraUsage: other ways the buffer is bound too (a storage buffer a kernel writes, say).
+  Buffer(const Context& context, vk::DeviceSize size, vk::Format texelFormat, MemoryUse use, std::string name,
+         vk::BufferUsageFlags extraUsage = {});
   Buffer(Buffer&&) noexcept = default;
   Buffer& operator=(Buffer&&) noexcept = default;
   ~Buffer();

@@ -32,6 +32,7 @@ layout(constant_id = kSpecPolygonCount) const uint POLYGON_COUNT = kRuntimeCount
 layout(constant_id = kSpecLightCount) const uint LIGHT_COUNT = kRuntimeCount;
 layout(constant_id = kSpecOccluderPlaneCount) const uint OCCLUDER_PLANE_COUNT = kRuntimeCount;
 layout(constant_id = kSpecMaterialCount) const uint MATERIAL_COUNT = kRuntimeCount;
+layout(constant_id = kSpecEntryPoints) const bool ENTRY_POINTS = false;
 
 const bool ROBUST = NUMERICS == kNumericsRobust;
 
@@ -60,6 +61,8 @@ layout(binding = kBindingBvhNodes, rgba32ui) uniform readonly restrict uimageBuf
 layout(binding = kBindingPrimRefs) uniform usamplerBuffer primRefTexels; // 1 per reference
 
 layout(std140, binding = kBindingSceneUbo) uniform SceneBlock { SceneUbo small; };
+// Written by shaders/entry.comp as a storage buffer, read here as texels once per invocation.
+layout(binding = kBindingEntryTexels) uniform usamplerBuffer entryTexels;
 
 // Loop bounds: a specialization constant where the host baked the count in (the loop unrolls).
 uint sphereCount() { return SPHERE_COUNT != kRuntimeCount ? SPHERE_COUNT : opaqueUniform(frame.counts.x); }
@@ -312,7 +315,19 @@ void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
   }
 }
 
-const int kBvhStackSize = 32; // the builder caps tree depth at this (host/accel/bvh.h)
+// The invocation's tile's entry points (gpu_types.h), loaded by loadEntryPoints(); with them an eye
+// ray's walk starts from the subtrees its tile's frustum reaches instead of the root.
+uvec4 gEntryStack = uvec4(kBvhNoRef);
+uvec4 gEntryStart = uvec4(kBvhNoRef, kBvhNoRef, kBvhNoRef, 0u); // stack words 4, 5; start; height
+
+// Call in main() with the invocation's pixel, when ENTRY_POINTS; `row0` is the band's first row.
+void loadEntryPoints(uvec2 pixel, uint row0) {
+  if (!ENTRY_POINTS) return;
+  uint tilesX = (frame.imageSize.x + kEntryTileSize - 1u) / kEntryTileSize;
+  uint tile = ((pixel.y - row0) / kEntryTileSize) * tilesX + pixel.x / kEntryTileSize;
+  gEntryStack = texelFetch(entryTexels, int(2u * tile));
+  gEntryStart = texelFetch(entryTexels, int(2u * tile + 1u));
+}
 
 // A BVH leaf entry: the primitive's kind and index. In a scene whose bounded primitives are all
 // triangles the host stores them in leaf order (host/render/gpu_scene.cpp, orderByLeaves), so the
@@ -373,11 +388,26 @@ float boxEntry(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
 // On lavapipe this beats walking the tree as a subgroup packet (one node read per 8 rays, shared by
 // broadcast; Wald et al. 2001), which vkray did while nodes were storage-buffer reads
 // (docs/performance.md, "Meshes").
-void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
-  uint stack[kBvhStackSize];
+void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
+  // The builder caps the depth at kBvhStackSize; a walk from entry points starts with up to
+  // kEntryStackSlots of them stacked.
+  uint stack[kBvhStackSize + kEntryStackSlots];
   int sp = 0;
   uint ref = opaqueUniform(frame.counts2.w); // the root
-  if (ref == kBvhNoRef) return; // an empty tree (the same for every invocation)
+  if (ENTRY_POINTS) {
+    // Constant slots: plain vector stores, written whether or not this ray starts from them.
+    stack[0] = gEntryStack.x;
+    stack[1] = gEntryStack.y;
+    stack[2] = gEntryStack.z;
+    stack[3] = gEntryStack.w;
+    stack[4] = gEntryStart.x;
+    stack[5] = gEntryStart.y;
+    if (fromEntryPoints) {
+      ref = gEntryStart.z;
+      sp = int(gEntryStart.w);
+    }
+  }
+  if (ref == kBvhNoRef) return; // an empty tree, or a tile whose frustum meets nothing
   // Every loop here is tested at the bottom, with a `break` as its last statement: llvmpipe leaves
   // a loop only at its back edge, so a loop tested at the top runs one more whole turn, every lane
   // masked off, after its last lane is done (docs/performance.md, "Loops end at the bottom").
@@ -430,7 +460,9 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit) {
 // whose count is baked in is unrolled, and stopping it early would only mask the remaining tests
 // on CPU drivers (3 % of the showcase's instructions), so it runs to the end. shadowRay: skip the
 // planes the host proved cannot stand between a surface and a light (host/scene/features.cpp).
-Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay) {
+// eyeRay: a ray from the eye through this invocation's pixel, which may start from the tile's entry
+// points (loadEntryPoints).
+Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay) {
   Hit hit = Hit(tMax, kNoHit, 0u, vec3(0.0));
   uint planes = HAS_PLANES ? (shadowRay ? occluderPlaneCount() : planeCount()) : 0u;
   if (planes > 0u) {
@@ -446,7 +478,7 @@ Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay) {
     }
   }
   if (USE_BVH) {
-    traverseBvh(r, hit, anyHit);
+    traverseBvh(r, hit, anyHit, ENTRY_POINTS && eyeRay);
   } else {
     uint spheres = HAS_SPHERES ? sphereCount() : 0u;
     if (spheres > 0u) {

@@ -95,7 +95,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     // An origin at the light (dist 0) is lit; its NaN direction meets nothing. Selects, not an
     // early return: on CPU drivers a return masks all the code after it.
     if (COUNT_STATS) gShadowRays += uint(dist > 0.0);
-    Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true);
+    Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true, false);
     return (dist <= 0.0 || h.kind == kNoHit) ? vec3(1.0) : vec3(0.0);
   }
   if (dist <= 0.0) return vec3(1.0);
@@ -108,7 +108,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     if (COUNT_STATS) gShadowRays++;
     TraceRay r = makeTraceRay(o, dir);
     float remaining = length(lightPos - o);
-    Hit h = traceScene(r, remaining, false, true);
+    Hit h = traceScene(r, remaining, false, true, false);
     if (h.kind == kNoHit) return transmit;
     Surface s = surfaceAt(r, h);
     Material m = loadMaterial(s.material);

@@ -42,7 +42,11 @@ VKRAY_CONST(uint, kBindingStats, 12u);       // RayStats
 VKRAY_CONST(uint, kBindingPrevImage, 13u);   // texels (RGBA32F): the base image the refine pass reads
 // The same small arrays packed into one uniform buffer (kSpecSceneInUbo), see SceneUbo below.
 VKRAY_CONST(uint, kBindingSceneUbo, 14u);
-VKRAY_CONST(uint, kBindingCount, 15u);
+VKRAY_CONST(uint, kBindingEntryPoints, 15u); // uvec4[]: each 8 x 8 tile's BVH entry points (below)
+// The same buffer as texels (RGBA32UI), as the trace kernels read it: on lavapipe an SSBO read
+// assembles each lane's value through memory, a texel read is one gather.
+VKRAY_CONST(uint, kBindingEntryTexels, 16u);
+VKRAY_CONST(uint, kBindingCount, 17u);
 
 // Capacities of the uniform copy, 64 KiB in all (the smallest maxUniformBufferRange of the devices
 // vkray targets). On CPU drivers a UBO read is one vector gather, an SSBO read a per-lane scalar
@@ -91,7 +95,9 @@ VKRAY_CONST(uint, kSpecRefinePass, 23u);
 VKRAY_CONST(uint, kSpecShadingInUbo, 24u);
 // Materials up to kMaxUnrolledCount are read into registers (scene.glsl, loadSceneRegisters).
 VKRAY_CONST(uint, kSpecMaterialCount, 25u);
-VKRAY_CONST(uint, kSpecCount, 26u);
+// Eye rays start their BVH walk at their tile's entry points (shaders/entry.comp) instead of the root.
+VKRAY_CONST(uint, kSpecEntryPoints, 26u);
+VKRAY_CONST(uint, kSpecCount, 27u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -122,6 +128,17 @@ VKRAY_CONST(uint, kBvhLeafCountShift, 27u); // 4 bits: leaves of 1 to 16 entries
 VKRAY_CONST(uint, kBvhLeafFirstMask, 0x07FFFFFFu);
 VKRAY_CONST(uint, kBvhNoRef, 0xFFFFFFFFu); // an empty tree's root
 VKRAY_CONST(uint, kPrimPlane, 3u);         // never in the BVH; used to tag hits
+VKRAY_CONST(uint, kBvhStackSize, 32u);     // the builder caps tree depth at this (host/accel/bvh.h)
+
+// Entry points (shaders/entry.comp): for each tile of kEntryTileSize x kEntryTileSize pixels (one
+// workgroup of the trace kernels), the BVH subtrees its eye rays' frustum reaches, at most
+// kEntryPointsMax, nearest first. Two uvec4 per tile, tiles row-major from the band's first row
+// (PushConstants.imageRow0): words 0..5 the walk's stack, bottom first (the farthest entry point at
+// the bottom), word 6 the entry point to start at (kBvhNoRef: the frustum meets nothing), word 7
+// the stack's height. An eye ray loads them as its walk's starting state.
+VKRAY_CONST(uint, kEntryTileSize, 8u);
+VKRAY_CONST(uint, kEntryStackSlots, 6u);
+VKRAY_CONST(uint, kEntryPointsMax, 7u); // kEntryStackSlots + 1
 
 // ---- Render passes (kSpecRefinePass; the push constant `pass` says the same) and flags ----------
 // The image holds, per pixel, vec4(sum of sample radiances, sample count); the host divides.

@@ -1,0 +1,145 @@
+// Entry points for eye rays: for each tile of 8 x 8 pixels of the band (one workgroup of the trace
+// kernels), the BVH subtrees that the tile's eye rays can reach, found once for the tile instead of
+// by each of its 64 rays walking down from the root (the entry-point search of Reshetov, Soupikov
+// and Hurley, "Multi-Level Ray Tracing Algorithm", SIGGRAPH 2005, with a budget instead of their
+// split heuristics).
+//
+// Every eye ray of the tile leaves the eye through the tile's pixel rectangle (widened by half a
+// pixel), so it lies in the frustum of four planes through the eye and the rectangle's corners; a
+// primitive the ray hits lies in the frustum, and so does some point of every box that contains
+// the primitive. The search walks the tree from the root, nearest box first, and drops subtrees
+// whose box lies wholly outside a plane (tested with the box's corner farthest along the plane's
+// normal, conservatively for rounding). It keeps expanding while the subtrees kept so far, those
+// waiting on its stack and the children just found fit kEntryPointsMax, and keeps a node whole
+// where they would not. The result, nearest first, is written as the walk's starting state
+// (gpu_types.h): an eye ray then finds exactly the hit it would find from the root, having
+// skipped the levels above the entry points and every subtree outside its tile.
+#version 460
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/gpu_types.h"
+
+layout(local_size_x = 64, local_size_y = 1, local_size_z = 1) in;
+
+#include "lib/scene.glsl"
+
+layout(std430, binding = kBindingEntryPoints) writeonly restrict buffer EntryPoints { uvec4 entryPoints[]; };
+layout(std430, binding = kBindingStats) readonly buffer StatsBuffer { RayStats stats; };
+layout(push_constant) uniform Push { PushConstants pc; };
+
+// The eye ray through a point of the image plane, unnormalized (eyeRayDir in scene.glsl, which
+// normalizes it: the same ray).
+vec3 imagePlaneDir(vec2 pixelPos) {
+  vec2 size = vec2(frame.imageSize.xy);
+  float x = 2.0 * pixelPos.x / size.x - 1.0;
+  float y = 1.0 - 2.0 * pixelPos.y / size.y;
+  return frame.cameraForward.xyz + x * frame.cameraRight.xyz + y * frame.cameraUp.xyz;
+}
+
+vec3 gEye;
+vec3 gFrustum[5]; // inward normals: four sides through the eye, and the plane facing the tile's centre
+
+// False only if the box lies wholly on the outer side of some plane. The box corner farthest along
+// a plane's normal decides; its distance counts as outside only beyond the rounding error bound of
+// its computation (a few ulps of the sum of the terms' magnitudes).
+bool boxInFrustum(vec3 bmin, vec3 bmax) {
+  bool inside = true;
+  for (int k = 0; k < 5; ++k) {
+    vec3 n = gFrustum[k];
+    vec3 d = mix(bmin, bmax, greaterThan(n, vec3(0.0))) - gEye;
+    inside = inside && dot(n, d) >= -1e-6 * dot(abs(n), abs(d));
+  }
+  return inside;
+}
+
+float boxDistance2(vec3 bmin, vec3 bmax) {
+  vec3 d = clamp(gEye, bmin, bmax) - gEye;
+  return dot(d, d);
+}
+
+void main() {
+  gDynamicZero = stats.pad0;
+  loadSceneRegisters(); // before any branch (scene.glsl)
+  uint tilesX = (frame.imageSize.x + kEntryTileSize - 1u) / kEntryTileSize;
+  uint tileRows = (pc.tileSize.y + kEntryTileSize - 1u) / kEntryTileSize;
+  uint tile = gl_GlobalInvocationID.x;
+  if (tile >= tilesX * tileRows) return;
+
+  // The tile's pixel rectangle in image coordinates, half a pixel wider on every side: sample
+  // positions lie within their pixel, and the margin dwarfs the rounding of the ray directions.
+  vec2 lo = vec2(float((tile % tilesX) * kEntryTileSize), float(pc.imageRow0 + (tile / tilesX) * kEntryTileSize)) - 0.5;
+  vec2 hi = lo + float(kEntryTileSize) + 1.0;
+  vec3 c00 = imagePlaneDir(lo);
+  vec3 c10 = imagePlaneDir(vec2(hi.x, lo.y));
+  vec3 c11 = imagePlaneDir(hi);
+  vec3 c01 = imagePlaneDir(vec2(lo.x, hi.y));
+  vec3 centre = imagePlaneDir(0.5 * (lo + hi));
+  gEye = frame.cameraOrigin.xyz;
+  gFrustum[0] = cross(c00, c10);
+  gFrustum[1] = cross(c10, c11);
+  gFrustum[2] = cross(c11, c01);
+  gFrustum[3] = cross(c01, c00);
+  for (int k = 0; k < 4; ++k) gFrustum[k] = dot(gFrustum[k], centre) < 0.0 ? -gFrustum[k] : gFrustum[k];
+  gFrustum[4] = centre;
+  // A frustum that is not a narrow cone (a tile spanning a very wide field of view) is not
+  // culled against: its planes may not bound it. The walk then starts at the root.
+  float cosMin = 0.25;
+  bool narrow = true;
+  vec3 cn = normalize(centre);
+  narrow = narrow && dot(normalize(c00), cn) > cosMin && dot(normalize(c10), cn) > cosMin;
+  narrow = narrow && dot(normalize(c11), cn) > cosMin && dot(normalize(c01), cn) > cosMin;
+  if (!narrow) {
+    for (int k = 0; k < 5; ++k) gFrustum[k] = vec3(0.0);
+  }
+
+  uint found[kEntryPointsMax];
+  int count = 0;
+  uint pending[kEntryPointsMax];
+  int top = 0;
+  uint root = opaqueUniform(frame.counts2.w);
+  if (root != kBvhNoRef) pending[top++] = root;
+  // Invariant: count + top <= kEntryPointsMax. The loop is tested at the bottom (scene.glsl).
+  if (top > 0) {
+    while (true) {
+      uint ref = pending[--top];
+      bool expanded = false;
+      if (ref < kBvhLeafFlag) {
+        int base = int(4u * ref);
+        uvec4 a = imageLoad(nodeTexels, base);
+        uvec4 b = imageLoad(nodeTexels, base + 1);
+        uvec4 c = imageLoad(nodeTexels, base + 2);
+        uvec4 d = imageLoad(nodeTexels, base + 3);
+        vec3 min0 = uintBitsToFloat(a.xyz), max0 = uintBitsToFloat(b.xyz);
+        vec3 min1 = uintBitsToFloat(c.xyz), max1 = uintBitsToFloat(d.xyz);
+        bool in0 = boxInFrustum(min0, max0);
+        bool in1 = boxInFrustum(min1, max1);
+        int children = int(in0) + int(in1);
+        // A leaf is never an entry point: the ray would test its primitives without testing its
+        // box, which only the record above holds. A record with a leaf child stays whole.
+        bool leafChild = (in0 && a.w >= kBvhLeafFlag) || (in1 && b.w >= kBvhLeafFlag);
+        if (!leafChild && count + top + children <= int(kEntryPointsMax)) {
+          expanded = true;
+          if (in0 && in1) {
+            bool firstNearer = boxDistance2(min0, max0) <= boxDistance2(min1, max1);
+            pending[top++] = firstNearer ? b.w : a.w; // the farther waits below the nearer
+            pending[top++] = firstNearer ? a.w : b.w;
+          } else if (in0) {
+            pending[top++] = a.w;
+          } else if (in1) {
+            pending[top++] = b.w;
+          }
+        }
+      }
+      if (!expanded) found[count++] = ref;
+      if (top == 0) break;
+    }
+  }
+
+  // found[0] is where an eye ray starts; the rest wait on its stack, the farthest at the bottom.
+  uint words[8];
+  for (int k = 0; k < 6; ++k) words[k] = k < count - 1 ? found[max(count - 1 - k, 0)] : kBvhNoRef;
+  words[6] = count > 0 ? found[0] : kBvhNoRef;
+  words[7] = uint(max(count - 1, 0));
+  entryPoints[2u * tile] = uvec4(words[0], words[1], words[2], words[3]);
+  entryPoints[2u * tile + 1u] = uvec4(words[4], words[5], words[6], words[7]);
+}
