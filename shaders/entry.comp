@@ -4,8 +4,8 @@
 // and Hurley, "Multi-Level Ray Tracing Algorithm", SIGGRAPH 2005, with a budget instead of their
 // split heuristics).
 //
-// Every eye ray of the tile leaves the eye through the tile's pixel rectangle (widened by half a
-// pixel), so it lies in the frustum of four planes through the eye and the rectangle's corners; a
+// Every eye ray of the tile leaves the eye through the tile's pixel rectangle (widened by a margin
+// for rounding), so it lies in the frustum of four planes through the eye and the rectangle's corners; a
 // primitive the ray hits lies in the frustum, and so does some point of every box that contains
 // the primitive. The search walks the tree from the root, nearest box first, and drops subtrees
 // whose box lies wholly outside a plane (tested with the box's corner farthest along the plane's
@@ -65,20 +65,34 @@ void main() {
   uint tile = gl_GlobalInvocationID.x;
   if (tile >= tilesX * tileRows) return;
 
-  // The tile's pixel rectangle in image coordinates, half a pixel wider on every side: sample
-  // positions lie within their pixel, and the margin dwarfs the rounding of the ray directions.
-  vec2 lo = vec2(float((tile % tilesX) * kEntryTileSize), float(pc.imageRow0 + (tile / tilesX) * kEntryTileSize)) - 0.5;
-  vec2 hi = lo + float(kEntryTileSize) + 1.0;
+  // The tile's pixel rectangle in image coordinates, widened on every side by a margin that
+  // covers the rounding of the ray directions (the trace kernels' and these): sample positions
+  // lie within their pixel. A direction's components carry errors of a few ulps of |F| + |R| + |U|
+  // (the camera vectors), which the margin bounds generously in pixels: 1/16 of a pixel at
+  // ordinary sizes, about one pixel for a 0.05 degree view 16384 pixels tall.
+  vec3 F = frame.cameraForward.xyz;
+  vec3 R = frame.cameraRight.xyz;
+  vec3 U = frame.cameraUp.xyz;
+  vec2 size = vec2(frame.imageSize.xy);
+  float pixel = min(2.0 * length(R) / size.x, 2.0 * length(U) / size.y); // in direction units
+  float margin = 0.0625 + 1e-6 * (length(F) + length(R) + length(U)) / pixel;
+  vec2 lo = vec2(float((tile % tilesX) * kEntryTileSize), float(pc.imageRow0 + (tile / tilesX) * kEntryTileSize)) - margin;
+  vec2 hi = lo + float(kEntryTileSize) + 2.0 * margin;
   vec3 c00 = imagePlaneDir(lo);
   vec3 c10 = imagePlaneDir(vec2(hi.x, lo.y));
   vec3 c11 = imagePlaneDir(hi);
   vec3 c01 = imagePlaneDir(vec2(lo.x, hi.y));
   vec3 centre = imagePlaneDir(0.5 * (lo + hi));
   gEye = frame.cameraOrigin.xyz;
-  gFrustum[0] = cross(c00, c10);
-  gFrustum[1] = cross(c10, c11);
-  gFrustum[2] = cross(c11, c01);
-  gFrustum[3] = cross(c01, c00);
+  // Each side's plane holds the eye, a corner ray and the side's direction in the image plane. The
+  // same plane as the cross product of the side's two corner rays, but without its cancellation:
+  // those rays are nearly parallel when pixels are small, their cross product then mostly rounding.
+  vec3 alongRow = R * (2.0 * (hi.x - lo.x) / size.x);
+  vec3 alongColumn = U * (-2.0 * (hi.y - lo.y) / size.y);
+  gFrustum[0] = cross(c00, alongRow);
+  gFrustum[1] = cross(c10, alongColumn);
+  gFrustum[2] = cross(c11, alongRow);
+  gFrustum[3] = cross(c01, alongColumn);
   for (int k = 0; k < 4; ++k) gFrustum[k] = dot(gFrustum[k], centre) < 0.0 ? -gFrustum[k] : gFrustum[k];
   gFrustum[4] = centre;
   // A frustum that is not a narrow cone (a tile spanning a very wide field of view) is not

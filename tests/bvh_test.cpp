@@ -687,6 +687,8 @@ TEST(GpuBvh, EntryPointsFindTheSameHitsAsTheRoot) {
       {"default", {1.0, 6.0, 9.0}, {0.0, 0.0, 0.0}, 50.0, 96, 72, false},
       {"partial tiles, wide", {0.5, 2.0, 2.5}, {0.0, 0.0, 0.0}, 150.0, 101, 37, false},
       {"narrow", {1.0, 6.0, 9.0}, {3.0, 0.0, 0.0}, 4.0, 64, 64, false},
+      // Pixels of 6e-7 radians: a tile's corner rays nearly parallel, their rounding a tenth of a pixel.
+      {"0.05 degrees, 1500 rows", {1.0, 6.0, 9.0}, {3.0, 0.0, 0.0}, 0.05, 24, 1500, false},
       {"inside the tube", {0.0, 0.0, 3.0}, {1.0, 0.0, 3.0}, 90.0, 80, 60, false},
       {"eye moved after upload", {-5.0, 2.0, 4.0}, {0.0, 0.0, 0.0}, 60.0, 96, 72, true},
       {"bands", {1.0, 6.0, 9.0}, {0.0, 0.0, 0.0}, 4.0, 2100, 44, false}, // first band: 32 rows
