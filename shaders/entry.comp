@@ -27,15 +27,6 @@ layout(std430, binding = kBindingEntryPoints) writeonly restrict buffer EntryPoi
 layout(std430, binding = kBindingStats) readonly buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 
-// The eye ray through a point of the image plane, unnormalized (eyeRayDir in scene.glsl, which
-// normalizes it: the same ray).
-vec3 imagePlaneDir(vec2 pixelPos) {
-  vec2 size = vec2(frame.imageSize.xy);
-  float x = 2.0 * pixelPos.x / size.x - 1.0;
-  float y = 1.0 - 2.0 * pixelPos.y / size.y;
-  return frame.cameraForward.xyz + x * frame.cameraRight.xyz + y * frame.cameraUp.xyz;
-}
-
 vec3 gEye;
 vec3 gFrustum[5]; // inward normals: four sides through the eye, and the plane facing the tile's centre
 

@@ -716,7 +716,9 @@ TEST(GpuBvh, EntryPointsFindTheSameHitsAsTheRoot) {
     banded.bandBudgetMs = 1e-3;
     RenderResult c = renderer.render(camera, scene.render, banded);
     test::expectNoValidationMessages();
-    if (v.width > 1000) EXPECT_EQ(c.timings.bands, 3);
+    if (v.width > 1000) {
+      EXPECT_EQ(c.timings.bands, 3);
+    }
     ASSERT_EQ(a.hits.size(), b.hits.size());
     ASSERT_EQ(c.hits.size(), b.hits.size());
     std::size_t hits = 0;

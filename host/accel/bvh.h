@@ -44,9 +44,10 @@ struct BvhPrimitive {
 };
 
 struct BvhOptions {
-  int bins = 16;              // SAH candidate planes per axis + 1 (at most 32)
-  int maxLeafSize = 4;        // a leaf never holds more (the depth guard keeps this true)
-  int maxDepth = 32;          // = kBvhStackSize in the shader: traversal never overflows
+  int bins = 16;       // SAH candidate planes per axis + 1 (at most 32)
+  int maxLeafSize = 4; // a leaf never holds more (the depth guard keeps this true)
+  // The shader's traversal stack holds this many: traversal never overflows.
+  int maxDepth = static_cast<int>(gpu::kBvhStackSize);
   float traversalCost = 1.0f; // SAH cost of visiting a node, relative to one primitive test
   int threads = 0;            // worker threads; 0: std::thread::hardware_concurrency()
 };

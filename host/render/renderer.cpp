@@ -69,6 +69,12 @@ void uploadTexels(std::unique_ptr<vulkan::Buffer>& buffer, const vulkan::Context
   buffer->write(data.data(), data.size() * sizeof(T));
 }
 
+// Entry-point tiles (shaders/entry.comp) covering `rows` rows of a `width`-pixel image.
+std::uint32_t entryTileCount(std::uint32_t width, std::uint32_t rows) {
+  return ((width + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize) *
+         ((rows + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize);
+}
+
 // Copies an array into its slot of the packed SceneUbo.
 template <typename T, std::size_t N> void packUniform(T (&slot)[N], const std::vector<T>& data) {
   std::copy(data.begin(), data.end(), slot);
@@ -204,8 +210,9 @@ vulkan::Specialization Renderer::specializationFor(const Features& f, const Rend
   spec.set(gpu::kSpecHasPlanes, all || f.planes);
   spec.set(gpu::kSpecHasTriangles, all || f.triangles);
   spec.set(gpu::kSpecHasPolygons, all || f.polygons);
-  spec.set(gpu::kSpecUseBvh, f.useBvh && !gpuScene_.bvh.nodes.empty());
-  spec.set(gpu::kSpecEntryPoints, f.useBvh && !gpuScene_.bvh.nodes.empty() && o.entryPoints);
+  const bool useBvh = f.useBvh && !gpuScene_.bvh.nodes.empty();
+  spec.set(gpu::kSpecUseBvh, useBvh);
+  spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints);
   spec.set(gpu::kSpecShadows, all || f.shadows);
   spec.set(gpu::kSpecReflection, all || f.reflection);
   spec.set(gpu::kSpecRefraction, all || f.refraction);
@@ -285,8 +292,7 @@ void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool n
     rebuild = true;
   }
   // Two uvec4 per tile of the window (shaders/entry.comp).
-  vk::DeviceSize tiles = static_cast<vk::DeviceSize>((width + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize) *
-                         ((rows + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize);
+  vk::DeviceSize tiles = entryTileCount(width, rows);
   if (entryPoints_->size() < tiles * 2 * sizeof(glm::uvec4)) {
     entryPoints_.reset();
     entryPoints_ = std::make_unique<vulkan::Buffer>(context_, tiles * 2 * sizeof(glm::uvec4),
@@ -368,8 +374,7 @@ std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const
     gpu::PushConstants band = push;
     band.tileOrigin = glm::uvec2(0, push.imageRow0);
     band.tileSize = glm::uvec2(frameWidth_, push.tileOrigin.y + push.tileSize.y - push.imageRow0);
-    std::uint32_t tiles = ((frameWidth_ + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize) *
-                          ((band.tileSize.y + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize);
+    std::uint32_t tiles = entryTileCount(frameWidth_, band.tileSize.y);
     cmd.bindPipeline(vk::PipelineBindPoint::eCompute, entryPipeline_->handle());
     cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, band);
     cmd.dispatch((tiles + 63) / 64, 1, 1);

@@ -251,13 +251,17 @@ uvec2 invocationPixel() {
   return gl_WorkGroupID.xy * uvec2(kWorkgroupSizeX, kWorkgroupSizeY) + inGroup;
 }
 
-// Eye ray through a point of the image plane given in pixels (x right, y down, (0,0) top-left).
-vec3 eyeRayDir(vec2 pixelPos) {
+// Direction, unnormalized, of the eye ray through a point of the image plane given in pixels (x
+// right, y down, (0,0) top-left).
+vec3 imagePlaneDir(vec2 pixelPos) {
   vec2 size = vec2(frame.imageSize.xy);
   float x = 2.0 * pixelPos.x / size.x - 1.0;
   float y = 1.0 - 2.0 * pixelPos.y / size.y;
-  return normalize(frame.cameraForward.xyz + x * frame.cameraRight.xyz + y * frame.cameraUp.xyz);
+  return frame.cameraForward.xyz + x * frame.cameraRight.xyz + y * frame.cameraUp.xyz;
 }
+
+// The same ray's unit direction.
+vec3 eyeRayDir(vec2 pixelPos) { return normalize(imagePlaneDir(pixelPos)); }
 
 float sphereT(TraceRay r, uint i, float tMax) {
   vec4 s = loadSphere(i).centerRadius;
