@@ -6,6 +6,8 @@
 #include "../shared/gpu_types.h"
 #include "common.glsl"
 
+#extension GL_KHR_shader_subgroup_ballot : require // traverseBvh's lockstep
+
 // ---- Specialization: what this scene calls for ---------------------------------------------------
 layout(constant_id = kSpecHasSpheres) const bool HAS_SPHERES = true;
 layout(constant_id = kSpecHasPlanes) const bool HAS_PLANES = true;
@@ -415,10 +417,21 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
   // Every loop here is tested at the bottom, with a `break` as its last statement: llvmpipe leaves
   // a loop only at its back edge, so a loop tested at the top runs one more whole turn, every lane
   // masked off, after its last lane is done (docs/performance.md, "Loops end at the bottom").
+  //
+  // The lanes of a subgroup walk in lockstep: a lane that holds a leaf (or has finished) stays in
+  // the loops, its steps selected away, and a loop ends when a ballot says no lane has work left in
+  // it. A lane that left a loop on its own would be masked off, and llvmpipe writes the stack under
+  // the mask lane by lane, a branch per lane on whether that lane is active; with lanes leaving at
+  // every step those branches mispredict, and each misprediction throws away the next step's
+  // record loads already in flight. Kept in the loops, the mask stays the same for the whole walk
+  // and the branches are predicted (1 M triangles: eye rays 25 % faster; docs/performance.md,
+  // "Lanes in lockstep"). Each lane still leaves a loop only when it has no work of its own in it,
+  // so the result does not depend on which lanes a ballot sees.
   while (true) {
-    if (ref < kBvhLeafFlag) {
+    if (subgroupBallot(ref < kBvhLeafFlag).x != 0u) {
       while (true) {
-        int base = int(4u * ref);
+        bool descending = ref < kBvhLeafFlag; // else the step changes nothing of this lane's
+        int base = int(4u * (descending ? ref : 0u));
         uvec4 a = imageLoad(nodeTexels, base);
         uvec4 b = imageLoad(nodeTexels, base + 1);
         uvec4 c = imageLoad(nodeTexels, base + 2);
@@ -430,33 +443,36 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
         bool in0 = !isinf(enter0);
         bool in1 = !isinf(enter1);
         // Branch-free step. The farther child is written to the free slot on top of the stack by
-        // every lane, and kept (sp advanced) only where both children are entered: a write under
-        // that condition would be a per-lane loop whose every lane tests the condition and
-        // mispredicts. The builder caps the depth at kBvhStackSize, so sp stays below it here.
+        // every lane, and kept (sp advanced) only where both children are entered. The builder caps
+        // the depth at kBvhStackSize, so sp stays below it here.
         bool firstNearer = enter0 <= enter1;
         stack[sp] = firstNearer ? ref1 : ref0;
         uint popped = stack[max(sp - 1, 0)];
         bool neither = !in0 && !in1;
         uint nearer = (in0 && (firstNearer || !in1)) ? ref0 : ref1; // the nearer child entered
-        ref = neither ? (sp > 0 ? popped : kBvhNoRef) : nearer;
-        sp += (in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0);
-        if (ref >= kBvhLeafFlag) break; // a leaf, or kBvhNoRef: the walk is over
+        uint next = neither ? (sp > 0 ? popped : kBvhNoRef) : nearer;
+        int nextSp = sp + ((in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0));
+        ref = descending ? next : ref;
+        sp = descending ? nextSp : sp;
+        if (subgroupBallot(ref < kBvhLeafFlag).x == 0u) break; // every lane holds a leaf, or kBvhNoRef
       }
     }
-    if (ref == kBvhNoRef) break;
-    uint entry = ref & kBvhLeafFirstMask;
-    uint end = entry + ((ref >> kBvhLeafCountShift) & 15u) + 1u; // a leaf holds at least one
-    while (true) {
-      uint kind;
-      uint index;
-      leafPrimitive(entry, kind, index);
-      testPrimitive(r, kind, index, hit);
-      if (anyHit && hit.kind != kNoHit) return;
-      ++entry;
-      if (entry >= end) break;
+    if (ref != kBvhNoRef) {
+      uint entry = ref & kBvhLeafFirstMask;
+      uint end = entry + ((ref >> kBvhLeafCountShift) & 15u) + 1u; // a leaf holds at least one
+      while (true) {
+        uint kind;
+        uint index;
+        leafPrimitive(entry, kind, index);
+        testPrimitive(r, kind, index, hit);
+        if (anyHit && hit.kind != kNoHit) break;
+        ++entry;
+        if (entry >= end) break;
+      }
+      if (anyHit && hit.kind != kNoHit) sp = 0; // found an occluder: this lane is done
+      ref = sp > 0 ? stack[--sp] : kBvhNoRef;
     }
-    ref = sp > 0 ? stack[--sp] : kBvhNoRef;
-    if (ref == kBvhNoRef) break;
+    if (subgroupBallot(ref != kBvhNoRef).x == 0u) break; // every lane is done
   }
 }
 
