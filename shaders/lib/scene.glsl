@@ -386,6 +386,12 @@ float boxEntry(TraceRay r, vec3 bmin, vec3 bmax, float tMax) {
   return enter <= leave ? enter : uintBitsToFloat(0x7F800000u);
 }
 
+// Whether `c` holds in any active lane of the subgroup. The whole ballot is compared: a subgroup may
+// have up to 128 lanes (64 on some GPUs), not only the 32 of its first word.
+bool anyLane(bool c) {
+  return subgroupBallot(c) != uvec4(0u);
+}
+
 // "While-while" order (Aila & Laine, "Understanding the Efficiency of Ray Traversal on GPUs",
 // HPG 2009): an invocation descends interior records until it holds a leaf, then tests the leaf's
 // primitives. Each record holds both children's boxes (BvhWideNode), so a step tests the two, goes
@@ -428,7 +434,7 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
   // "Lanes in lockstep"). Each lane still leaves a loop only when it has no work of its own in it,
   // so the result does not depend on which lanes a ballot sees.
   while (true) {
-    if (subgroupBallot(ref < kBvhLeafFlag).x != 0u) {
+    if (anyLane(ref < kBvhLeafFlag)) {
       while (true) {
         bool descending = ref < kBvhLeafFlag; // else the step changes nothing of this lane's
         int base = int(4u * (descending ? ref : 0u));
@@ -454,7 +460,7 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
         int nextSp = sp + ((in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0));
         ref = descending ? next : ref;
         sp = descending ? nextSp : sp;
-        if (subgroupBallot(ref < kBvhLeafFlag).x == 0u) break; // every lane holds a leaf, or kBvhNoRef
+        if (!anyLane(ref < kBvhLeafFlag)) break; // every lane holds a leaf, or kBvhNoRef
       }
     }
     if (ref != kBvhNoRef) {
@@ -472,7 +478,7 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
       if (anyHit && hit.kind != kNoHit) sp = 0; // found an occluder: this lane is done
       ref = sp > 0 ? stack[--sp] : kBvhNoRef;
     }
-    if (subgroupBallot(ref != kBvhNoRef).x == 0u) break; // every lane is done
+    if (!anyLane(ref != kBvhNoRef)) break; // every lane is done
   }
 }
 
