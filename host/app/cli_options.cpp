@@ -28,6 +28,8 @@ void addDeviceFlags(CLI::App& app, DeviceFlags& f) {
   app.add_flag("--validate", f.validate, "enable the Khronos validation layer; any message fails the run");
   app.add_flag("--sync-validation", f.syncValidate, "also enable its synchronization validation");
   app.add_flag("--no-pipeline-cache", f.noPipelineCache, "do not read or write the on-disk pipeline cache");
+  app.add_flag("--no-huge-pages", f.noHugePages,
+               "keep large scene buffers in the driver's memory, not in vkray's own huge pages (for comparison)");
 }
 
 vulkan::ContextOptions contextOptions(const DeviceFlags& f) {
@@ -35,6 +37,7 @@ vulkan::ContextOptions contextOptions(const DeviceFlags& f) {
   o.device = f.device;
   o.validation = f.validate;
   o.synchronizationValidation = f.syncValidate;
+  o.hostPages = !f.noHugePages;
   return o;
 }
 

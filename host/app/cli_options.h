@@ -17,6 +17,7 @@ struct DeviceFlags {
   bool validate = false;     // --validate
   bool syncValidate = false; // --sync-validation
   bool noPipelineCache = false;
+  bool noHugePages = false; // --no-huge-pages
 };
 
 struct RenderFlags {

@@ -10,6 +10,7 @@
 #include "scene/scene_loader.h"
 #include "util/error.h"
 #include "vk/context.h"
+#include "vk/host_pages.h"
 
 namespace vkray {
 
@@ -144,6 +145,11 @@ int runRender(const RenderArgs& args) {
         std::printf("bytes per triangle: %.1f\n", static_cast<double>(g.meshBytes()) / g.triangles.size());
       }
     }
+    Renderer::HostPageUse pages = renderer.sceneHostPages();
+    if (pages.bytes > 0) {
+      std::printf("scene buffers in vkray's pages: %.1f MiB, %.1f MiB of them on huge pages\n", pages.bytes / 1048576.0,
+                  pages.hugeBytes / 1048576.0);
+    }
     printStat("upload", renderer.uploadMs());
     printStat("pipeline", result.timings.pipelineMs);
     std::printf("pipeline cache: %s\n", !cache                    ? "off"
@@ -185,6 +191,10 @@ int runInfo(const DeviceFlags& flags) {
                 VK_API_VERSION_PATCH(d.apiVersion));
     std::printf("  shaderFloat64: %s (float64 reference kernel)\n", d.shaderFloat64 ? "yes" : "no");
     std::printf("  timestamps: %s (GPU trace time)\n", d.timestamps ? "yes" : "no");
+    std::printf("  subgroups: %u lanes; basic, arithmetic and ballot in compute shaders: %s\n", d.subgroupSize,
+                d.subgroupMissing.empty()
+                    ? "yes (the BVH walk's lockstep, the ray counters)"
+                    : ("no, lacks " + d.subgroupMissing + " (vkray cannot use this device)").c_str());
     std::printf("  maxStorageBufferRange: %llu MiB (largest sphere, plane, polygon or material array)\n",
                 static_cast<unsigned long long>(d.maxStorageBufferRange >> 20));
     std::printf(
@@ -192,6 +202,14 @@ int runInfo(const DeviceFlags& flags) {
         static_cast<unsigned long long>(d.maxTexelBufferElements));
     std::printf("  maxMemoryAllocationSize: %llu MiB\n",
                 static_cast<unsigned long long>(d.maxMemoryAllocationSize >> 20));
+    if (d.hostImportAlignment != 0) {
+      std::printf("  VK_EXT_external_memory_host: yes (scene buffers of 4 MiB or more in vkray's own pages, advised "
+                  "for huge pages; this machine's transparent huge pages: %s)\n",
+                  vulkan::transparentHugePages().c_str());
+    } else {
+      std::printf("  VK_EXT_external_memory_host: %s\n", d.type == "CPU" ? "no (scene buffers in the driver's memory)"
+                                                                         : "not used (GPU memory is the driver's)");
+    }
   }
   if (!flags.device.empty()) {
     vulkan::ContextOptions options;

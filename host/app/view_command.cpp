@@ -59,6 +59,7 @@ ViewerOptions baseViewerOptions(const std::filesystem::path& scene, const Render
   o.device = device.device;
   o.validate = device.validate;
   o.pipelineCache = !device.noPipelineCache;
+  o.hostPages = !device.noHugePages;
   return o;
 }
 

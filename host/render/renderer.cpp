@@ -184,6 +184,17 @@ void Renderer::setScene(const Scene& scene) {
   image_.reset(); // descriptors are rewritten once the image window exists
 }
 
+Renderer::HostPageUse Renderer::sceneHostPages() const {
+  HostPageUse use;
+  for (const auto& buffer : sceneBuffers_) {
+    if (const vulkan::HostPages* pages = buffer ? buffer->hostPages() : nullptr) {
+      use.bytes += pages->size();
+      use.hugeBytes += pages->hugeBytes();
+    }
+  }
+  return use;
+}
+
 bool Renderer::useUniformScene(const RenderOptions& o) const {
   switch (o.sceneMemory) {
   case SceneMemory::Uniform:

@@ -111,6 +111,13 @@ public:
   double bvhBuildMs() const { return gpuScene_.bvh.stats.buildMs; }
   const GpuScene& gpuScene() const { return gpuScene_; }
   const Features& sceneFeatures() const { return features_; }
+  // The scene's buffers in vkray's own pages (host/vk/host_pages.h): how many bytes, and how many
+  // of them the kernel backs with huge pages now. Both 0 where the device imports no host memory.
+  struct HostPageUse {
+    std::size_t bytes = 0;
+    std::size_t hugeBytes = 0;
+  };
+  HostPageUse sceneHostPages() const;
 
   // Headless: the whole image, in bands, read back and averaged.
   RenderResult render(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);

@@ -704,6 +704,7 @@ int runViewer(const ViewerOptions& o) {
   co.validation = o.validate;
   co.synchronizationValidation = o.syncValidate;
   co.device = o.device;
+  co.hostPages = o.hostPages;
   co.instanceExtensions = glfw.requiredInstanceExtensions();
   co.deviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
   // The queue also blits and draws the overlay; whether it can present to this window is checked

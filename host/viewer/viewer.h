@@ -50,6 +50,7 @@ struct ViewerOptions {
   bool validate = false;
   bool syncValidate = false;
   bool pipelineCache = true;
+  bool hostPages = true; // large scene buffers in vkray's own huge pages (--no-huge-pages: off)
   bool specialize = true;
   bool cullRows = true;    // RenderOptions::cullRows
   bool entryPoints = true; // RenderOptions::entryPoints

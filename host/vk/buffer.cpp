@@ -24,6 +24,13 @@ std::string mib(vk::DeviceSize bytes) {
   return std::to_string((bytes + (1u << 20) - 1) >> 20) + " MiB";
 }
 
+// Device-local buffers at least this large live in HostPages on CPU devices that can import them:
+// the mesh's BVH records and triangles, read at random by every ray. With 4 KiB pages their
+// translations overflow the TLB (a 1 M-triangle mesh spans 22 k pages); on 2 MiB pages they fit.
+// lavapipe's own allocations are shared-memory files, which the kernel does not back with huge
+// pages unless the machine's shmem setting says so (docs/performance.md, "Huge pages").
+constexpr vk::DeviceSize kHostImportMinBytes = 4u << 20;
+
 } // namespace
 
 Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags usage, MemoryUse use, std::string name)
@@ -40,33 +47,59 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags
   if (use == MemoryUse::DeviceLocal)
     usage |= vk::BufferUsageFlagBits::eTransferDst | vk::BufferUsageFlagBits::eTransferSrc;
   const std::string step = "creating buffer '" + name_ + "'";
+  bool importHost = use == MemoryUse::DeviceLocal && context.hostImportEnabled() && size_ >= kHostImportMinBytes &&
+                    kHugePageBytes % info.hostImportAlignment == 0;
   vulkanStep(step, [&] {
     const auto& device = context.device();
-    buffer_ = vk::raii::Buffer(device, vk::BufferCreateInfo({}, size_, usage, vk::SharingMode::eExclusive));
+    using HT = vk::ExternalMemoryHandleTypeFlagBits;
+    vk::ExternalMemoryBufferCreateInfo external(HT::eHostAllocationEXT);
+    buffer_ = vk::raii::Buffer(device, vk::BufferCreateInfo({}, size_, usage, vk::SharingMode::eExclusive, {},
+                                                            importHost ? &external : nullptr));
     auto req = buffer_.getMemoryRequirements();
+    std::uint32_t typeBits = req.memoryTypeBits;
+    if (importHost) {
+      host_ = HostPages(std::max(req.size, size_));
+      std::uint32_t importable =
+          device.getMemoryHostPointerPropertiesEXT(HT::eHostAllocationEXT, host_.data()).memoryTypeBits;
+      if (typeBits & importable) {
+        typeBits &= importable;
+      } else { // the driver's own memory after all
+        host_ = HostPages();
+        importHost = false;
+      }
+    }
     auto props = context.physicalDevice().getMemoryProperties();
     using MP = vk::MemoryPropertyFlagBits;
     std::optional<std::uint32_t> type;
     switch (use) {
     case MemoryUse::DeviceLocal:
-      type = findMemoryType(props, req.memoryTypeBits, MP::eDeviceLocal | MP::eHostVisible | MP::eHostCoherent);
-      if (!type) type = findMemoryType(props, req.memoryTypeBits, MP::eDeviceLocal);
+      type = findMemoryType(props, typeBits, MP::eDeviceLocal | MP::eHostVisible | MP::eHostCoherent);
+      if (!type) type = findMemoryType(props, typeBits, MP::eDeviceLocal);
       break;
     case MemoryUse::Upload:
-      type = findMemoryType(props, req.memoryTypeBits, MP::eHostVisible | MP::eHostCoherent);
+      type = findMemoryType(props, typeBits, MP::eHostVisible | MP::eHostCoherent);
       break;
     case MemoryUse::Readback:
-      type = findMemoryType(props, req.memoryTypeBits, MP::eHostVisible | MP::eHostCached);
-      if (!type) type = findMemoryType(props, req.memoryTypeBits, MP::eHostVisible | MP::eHostCoherent);
+      type = findMemoryType(props, typeBits, MP::eHostVisible | MP::eHostCached);
+      if (!type) type = findMemoryType(props, typeBits, MP::eHostVisible | MP::eHostCoherent);
       break;
     }
-    if (!type) type = findMemoryType(props, req.memoryTypeBits, {});
+    if (!type) type = findMemoryType(props, typeBits, {});
     if (!type) throw DeviceError(step + ": no memory type fits");
     auto flags = props.memoryTypes[*type].propertyFlags;
     coherent_ = static_cast<bool>(flags & MP::eHostCoherent);
-    memory_ = vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(req.size, *type));
+    if (importHost) {
+      vk::ImportMemoryHostPointerInfoEXT import(HT::eHostAllocationEXT, host_.data());
+      memory_ = vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(host_.size(), *type, &import));
+      mapped_ = host_.data(); // the same pages the device reads
+    } else {
+      memory_ = vk::raii::DeviceMemory(device, vk::MemoryAllocateInfo(req.size, *type));
+    }
     buffer_.bindMemory(*memory_, 0);
-    if (flags & MP::eHostVisible) mapped_ = memory_.mapMemory(0, VK_WHOLE_SIZE);
+    if (!mapped_ && (flags & MP::eHostVisible)) {
+      mapped_ = memory_.mapMemory(0, VK_WHOLE_SIZE);
+      vkMapped_ = true;
+    }
   });
 }
 
@@ -110,7 +143,7 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::Format texelForm
 }
 
 Buffer::~Buffer() {
-  if (mapped_ && *memory_) memory_.unmapMemory();
+  if (vkMapped_ && *memory_) memory_.unmapMemory();
 }
 
 void Buffer::write(const void* data, vk::DeviceSize bytes, vk::DeviceSize offset) {

@@ -8,6 +8,8 @@
 
 #include <vulkan/vulkan_raii.hpp>
 
+#include "vk/host_pages.h"
+
 namespace vkray::vulkan {
 
 class Context;
@@ -37,6 +39,8 @@ public:
   vk::DeviceSize size() const { return size_; }
   const std::string& name() const { return name_; }
   bool mapped() const { return mapped_ != nullptr; }
+  // The pages this buffer's memory imports, or null where it lives in the driver's own memory.
+  const HostPages* hostPages() const { return host_.data() ? &host_ : nullptr; }
 
   void write(const void* data, vk::DeviceSize bytes, vk::DeviceSize offset = 0);
   void read(void* out, vk::DeviceSize bytes, vk::DeviceSize offset = 0) const;
@@ -46,7 +50,10 @@ private:
   std::string name_;
   vk::DeviceSize size_ = 0;
   bool coherent_ = true;
-  // Memory outlives the buffer bound to it: declared first, destroyed last.
+  bool vkMapped_ = false; // mapped_ came from vkMapMemory (not from host_)
+  // Destruction runs upwards: the view, the buffer, the memory bound to it, then the host pages
+  // that memory imports (if any).
+  HostPages host_;
   vk::raii::DeviceMemory memory_{nullptr};
   vk::raii::Buffer buffer_{nullptr};
   vk::raii::BufferView view_{nullptr}; // destroyed before the buffer it views

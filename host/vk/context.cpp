@@ -63,12 +63,30 @@ int typeRank(vk::PhysicalDeviceType t) {
   }
 }
 
+} // namespace
+
+std::string missingSubgroupSupport(const vk::PhysicalDeviceSubgroupProperties& properties) {
+  if (!(properties.supportedStages & vk::ShaderStageFlagBits::eCompute)) return "subgroups in compute shaders";
+  using Op = vk::SubgroupFeatureFlagBits;
+  std::string missing;
+  for (auto [op, name] : {std::pair{Op::eBasic, "basic"}, {Op::eArithmetic, "arithmetic"}, {Op::eBallot, "ballot"}}) {
+    if (!(properties.supportedOperations & op)) missing += (missing.empty() ? "" : ", ") + std::string(name);
+  }
+  return missing;
+}
+
+namespace {
+
 DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   DeviceInfo info;
   info.index = index;
-  auto chain = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties>();
+  auto chain = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties,
+                                 vk::PhysicalDeviceSubgroupProperties>();
   const auto& props = chain.get<vk::PhysicalDeviceProperties2>().properties;
   const auto& driver = chain.get<vk::PhysicalDeviceDriverProperties>();
+  const auto& subgroups = chain.get<vk::PhysicalDeviceSubgroupProperties>();
+  info.subgroupSize = subgroups.subgroupSize;
+  info.subgroupMissing = missingSubgroupSupport(subgroups);
   info.name = props.deviceName.data();
   info.type = typeName(props.deviceType);
   info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
@@ -86,6 +104,17 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   info.maxComputeWorkGroupInvocations = props.limits.maxComputeWorkGroupInvocations;
   auto maint3 = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceMaintenance3Properties>();
   info.maxMemoryAllocationSize = maint3.get<vk::PhysicalDeviceMaintenance3Properties>().maxMemoryAllocationSize;
+  if (props.deviceType == vk::PhysicalDeviceType::eCpu) {
+    auto available = pd.enumerateDeviceExtensionProperties();
+    bool offered = std::any_of(available.begin(), available.end(), [](const vk::ExtensionProperties& p) {
+      return std::string_view(p.extensionName.data()) == VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME;
+    });
+    if (offered) {
+      auto host = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>();
+      info.hostImportAlignment =
+          host.get<vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>().minImportedHostPointerAlignment;
+    }
+  }
   return info;
 }
 
@@ -204,6 +233,11 @@ Context::Context(const ContextOptions& options) : log_(std::make_unique<Validati
     }
     return true;
   };
+  auto subgroupGaps = [&](const vk::raii::PhysicalDevice& pd) {
+    return missingSubgroupSupport(
+        pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties>()
+            .get<vk::PhysicalDeviceSubgroupProperties>());
+  };
 
   int chosen = -1;
   if (!options.device.empty()) {
@@ -227,17 +261,26 @@ Context::Context(const ContextOptions& options) : log_(std::make_unique<Validati
                         std::string(devices[static_cast<std::size_t>(chosen)].getProperties().deviceName.data()) +
                         "' lacks a required extension");
     }
+    if (std::string gaps = subgroupGaps(devices[static_cast<std::size_t>(chosen)]); !gaps.empty()) {
+      throw DeviceError(
+          "device '" + std::string(devices[static_cast<std::size_t>(chosen)].getProperties().deviceName.data()) +
+          "' lacks subgroup operations the kernels use: " + gaps + " (VkPhysicalDeviceSubgroupProperties)");
+    }
   } else {
     int bestRank = 1 << 30;
     for (std::uint32_t i = 0; i < devices.size(); ++i) {
-      if (familyFor(devices[i]) < 0 || !hasExtensions(devices[i])) continue;
+      if (familyFor(devices[i]) < 0 || !hasExtensions(devices[i]) || !subgroupGaps(devices[i]).empty()) continue;
       int rank = typeRank(devices[i].getProperties().deviceType);
       if (rank < bestRank) {
         bestRank = rank;
         chosen = static_cast<int>(i);
       }
     }
-    if (chosen < 0) throw DeviceError(std::string("no Vulkan device with a suitable compute queue: ") + kInstallHint);
+    if (chosen < 0) {
+      throw DeviceError(std::string("no Vulkan device with a suitable compute queue and subgroup basic, arithmetic and "
+                                    "ballot operations in compute shaders: ") +
+                        kInstallHint);
+    }
   }
   physicalDevice_ = std::move(devices[static_cast<std::size_t>(chosen)]);
   info_ = describe(physicalDevice_, static_cast<std::uint32_t>(chosen));
@@ -257,6 +300,8 @@ Context::Context(const ContextOptions& options) : log_(std::make_unique<Validati
   features.shaderStorageImageWriteWithoutFormat = info_.storageImageWriteWithoutFormat ? VK_TRUE : VK_FALSE;
   std::vector<const char*> extensions;
   for (const auto& e : options.deviceExtensions) extensions.push_back(e.c_str());
+  hostImport_ = options.hostPages && info_.hostImportAlignment != 0;
+  if (hostImport_) extensions.push_back(VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME);
   vk::DeviceCreateInfo deviceInfo({}, queueInfo, {}, extensions, &features);
   device_ = vulkanStep("creating the logical device", [&] { return vk::raii::Device(physicalDevice_, deviceInfo); });
   queue_ = vulkanStep("getting the queue", [&] { return device_.getQueue(queueFamily_, 0); });

@@ -22,6 +22,9 @@ struct ContextOptions {
   std::string device;                          // index or case-insensitive name substring; empty: best
   std::vector<std::string> instanceExtensions; // e.g. GLFW's surface extensions
   std::vector<std::string> deviceExtensions;   // e.g. VK_KHR_swapchain
+  // Large device-local buffers in vkray's own huge pages where a CPU device can import them
+  // (VK_EXT_external_memory_host; host/vk/host_pages.h). Off: the driver's memory, for comparison.
+  bool hostPages = true;
   // Extra queue-family requirement (the viewer asks for present support).
   std::function<bool(const vk::raii::PhysicalDevice&, std::uint32_t family)> queueFamilyFilter;
 };
@@ -42,7 +45,19 @@ struct DeviceInfo {
   std::uint32_t maxComputeWorkGroupSizeX = 0;
   std::uint32_t maxComputeWorkGroupInvocations = 0;
   std::uint32_t maxPushConstantsSize = 0;
+  // VK_EXT_external_memory_host on a CPU device: large buffers can live in memory vkray allocates
+  // itself (host/vk/buffer.cpp). 0 where not offered.
+  std::uint64_t hostImportAlignment = 0;
+  std::uint32_t subgroupSize = 0;
+  // The subgroup operations the kernels use that the device lacks in compute shaders, in words
+  // ("" when it has them all): see missingSubgroupSupport.
+  std::string subgroupMissing;
 };
+
+// The kernels vote and count across a subgroup (the BVH walk's lockstep ballots, the ray counters'
+// sums): they need basic, arithmetic and ballot operations in compute shaders. Names what is
+// missing ("ballot, arithmetic"), or "" when nothing is.
+std::string missingSubgroupSupport(const vk::PhysicalDeviceSubgroupProperties& properties);
 
 // Messages the validation layer reported (warnings and errors).
 class ValidationLog {
@@ -79,6 +94,8 @@ public:
   double timestampPeriodNs() const { return timestampPeriodNs_; }
   std::uint32_t timestampValidBits() const { return timestampValidBits_; }
   bool validationEnabled() const { return validation_; }
+  // VK_EXT_external_memory_host is enabled: buffers may import memory vkray allocated.
+  bool hostImportEnabled() const { return hostImport_; }
 
   // Records with `record`, submits, and waits. `step` names the work in error messages; a lost
   // device throws DeviceLostError.
@@ -106,6 +123,7 @@ private:
   DeviceInfo info_;
   bool float64Enabled_ = false;
   bool validation_ = false;
+  bool hostImport_ = false;
   double timestampPeriodNs_ = 1.0;
   std::uint32_t timestampValidBits_ = 0;
 };
