@@ -63,9 +63,12 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags
           device.getMemoryHostPointerPropertiesEXT(HT::eHostAllocationEXT, host_.data()).memoryTypeBits;
       if (typeBits & importable) {
         typeBits &= importable;
-      } else { // the driver's own memory after all
+      } else { // the driver's own memory after all, for a buffer made without the import's handle type
         host_ = HostPages();
         importHost = false;
+        buffer_ = vk::raii::Buffer(device, vk::BufferCreateInfo({}, size_, usage, vk::SharingMode::eExclusive));
+        req = buffer_.getMemoryRequirements();
+        typeBits = req.memoryTypeBits;
       }
     }
     auto props = context.physicalDevice().getMemoryProperties();
