@@ -3,9 +3,16 @@
 // its own memory.
 #include <cmath>
 #include <cstdint>
+#include <cstdlib>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
 #include <memory>
+#include <string>
 #include <vector>
+
+#include <unistd.h>
 
 #include <gtest/gtest.h>
 
@@ -154,6 +161,58 @@ TEST(GpuHostPages, DeviceAndHostSeeTheSameBytes) {
   vulkan::Buffer small(context, 4096, vk::BufferUsageFlagBits::eStorageBuffer, vulkan::MemoryUse::DeviceLocal, "small");
   EXPECT_EQ(small.hostPages(), nullptr);
   test::expectNoValidationMessages();
+}
+
+// The command line: `render --stats` says how much of the scene is in vkray's pages, and
+// `--no-huge-pages` keeps it in the driver's memory with the same image, byte for byte.
+TEST(CliHostPages, StatsReportThePagesAndTheFlagTurnsThemOff) {
+  bool imports = false;
+  for (const vulkan::DeviceInfo& d : vulkan::Context::listDevices()) {
+    imports = imports || (d.name.find("llvmpipe") != std::string::npos && d.hostImportAlignment != 0);
+  }
+  if (!imports) GTEST_SKIP() << "lavapipe imports no host memory here";
+  namespace fs = std::filesystem;
+  fs::path dir = fs::temp_directory_path() / ("vkray-cli-pages-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  // A 320 x 200 grid of quads: 128 000 triangles, 5.9 MiB of them in the kernel's layout.
+  {
+    std::ofstream obj(dir / "grid.obj");
+    const int nx = 320, ny = 200;
+    for (int j = 0; j <= ny; ++j) {
+      for (int i = 0; i <= nx; ++i)
+        obj << "v " << i * 0.01 << ' ' << j * 0.01 << ' ' << 0.02 * std::sin(i * 0.3) << '\n';
+    }
+    for (int j = 0; j < ny; ++j) {
+      for (int i = 0; i < nx; ++i) {
+        int a = j * (nx + 1) + i + 1, b = a + 1, c = a + nx + 2, d = a + nx + 1;
+        obj << "f " << a << ' ' << b << ' ' << c << "\nf " << a << ' ' << c << ' ' << d << '\n';
+      }
+    }
+  }
+  std::ofstream(dir / "grid.json") << R"({ "camera": { "position": [1.6, 1, 3], "look_at": [1.6, 1, 0] },
+    "lights": [ { "type": "point", "position": [1, 2, 3], "color": [1, 1, 1] } ],
+    "objects": [ { "type": "mesh", "file": "grid.obj" } ] })";
+  auto run = [&](const std::string& flags, const std::string& out) {
+    std::string cmd = std::string("VKRAY_DEVICE=llvmpipe '") + VKRAY_BINARY + "' render '" +
+                      (dir / "grid.json").string() + "' -o '" + (dir / out).string() +
+                      "' --width 32 --height 24 --stats -q " + flags + " >'" + (dir / "log.txt").string() + "' 2>&1";
+    int status = std::system(cmd.c_str());
+    std::ifstream in(dir / "log.txt");
+    std::string log((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    EXPECT_EQ(status, 0) << log;
+    return log;
+  };
+  std::string on = run("", "on.png");
+  std::string off = run("--no-huge-pages", "off.png");
+  EXPECT_NE(on.find("scene buffers in vkray's pages: 6.0 MiB"), std::string::npos) << on;
+  EXPECT_EQ(off.find("scene buffers in vkray's pages"), std::string::npos) << off;
+  auto bytes = [&](const char* name) {
+    std::ifstream in(dir / name, std::ios::binary);
+    return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  };
+  EXPECT_FALSE(bytes("on.png").empty());
+  EXPECT_EQ(bytes("on.png"), bytes("off.png"));
+  fs::remove_all(dir);
 }
 
 } // namespace
