@@ -53,9 +53,12 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags
     const auto& device = context.device();
     using HT = vk::ExternalMemoryHandleTypeFlagBits;
     vk::ExternalMemoryBufferCreateInfo external(HT::eHostAllocationEXT);
-    buffer_ = vk::raii::Buffer(device, vk::BufferCreateInfo({}, size_, usage, vk::SharingMode::eExclusive, {},
-                                                            importHost ? &external : nullptr));
-    auto req = buffer_.getMemoryRequirements();
+    auto makeBuffer = [&] {
+      buffer_ = vk::raii::Buffer(device, vk::BufferCreateInfo({}, size_, usage, vk::SharingMode::eExclusive, {},
+                                                              importHost ? &external : nullptr));
+      return buffer_.getMemoryRequirements();
+    };
+    auto req = makeBuffer();
     std::uint32_t typeBits = req.memoryTypeBits;
     if (importHost) {
       host_ = HostPages(std::max(req.size, size_));
@@ -66,8 +69,7 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags
       } else { // the driver's own memory after all, for a buffer made without the import's handle type
         host_ = HostPages();
         importHost = false;
-        buffer_ = vk::raii::Buffer(device, vk::BufferCreateInfo({}, size_, usage, vk::SharingMode::eExclusive));
-        req = buffer_.getMemoryRequirements();
+        req = makeBuffer();
         typeBits = req.memoryTypeBits;
       }
     }

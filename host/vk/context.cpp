@@ -63,6 +63,16 @@ int typeRank(vk::PhysicalDeviceType t) {
   }
 }
 
+bool listsExtension(const std::vector<vk::ExtensionProperties>& available, std::string_view name) {
+  return std::any_of(available.begin(), available.end(),
+                     [&](const vk::ExtensionProperties& p) { return name == p.extensionName.data(); });
+}
+
+vk::PhysicalDeviceSubgroupProperties subgroupProperties(const vk::raii::PhysicalDevice& pd) {
+  return pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties>()
+      .get<vk::PhysicalDeviceSubgroupProperties>();
+}
+
 } // namespace
 
 std::string missingSubgroupSupport(const vk::PhysicalDeviceSubgroupProperties& properties) {
@@ -80,11 +90,10 @@ namespace {
 DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   DeviceInfo info;
   info.index = index;
-  auto chain = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties,
-                                 vk::PhysicalDeviceSubgroupProperties>();
+  auto chain = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceDriverProperties>();
   const auto& props = chain.get<vk::PhysicalDeviceProperties2>().properties;
   const auto& driver = chain.get<vk::PhysicalDeviceDriverProperties>();
-  const auto& subgroups = chain.get<vk::PhysicalDeviceSubgroupProperties>();
+  const vk::PhysicalDeviceSubgroupProperties subgroups = subgroupProperties(pd);
   info.subgroupSize = subgroups.subgroupSize;
   info.subgroupMissing = missingSubgroupSupport(subgroups);
   info.name = props.deviceName.data();
@@ -105,11 +114,7 @@ DeviceInfo describe(const vk::raii::PhysicalDevice& pd, std::uint32_t index) {
   auto maint3 = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceMaintenance3Properties>();
   info.maxMemoryAllocationSize = maint3.get<vk::PhysicalDeviceMaintenance3Properties>().maxMemoryAllocationSize;
   if (props.deviceType == vk::PhysicalDeviceType::eCpu) {
-    auto available = pd.enumerateDeviceExtensionProperties();
-    bool offered = std::any_of(available.begin(), available.end(), [](const vk::ExtensionProperties& p) {
-      return std::string_view(p.extensionName.data()) == VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME;
-    });
-    if (offered) {
+    if (listsExtension(pd.enumerateDeviceExtensionProperties(), VK_EXT_EXTERNAL_MEMORY_HOST_EXTENSION_NAME)) {
       auto host = pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>();
       info.hostImportAlignment =
           host.get<vk::PhysicalDeviceExternalMemoryHostPropertiesEXT>().minImportedHostPointerAlignment;
@@ -226,18 +231,10 @@ Context::Context(const ContextOptions& options) : log_(std::make_unique<Validati
   };
   auto hasExtensions = [&](const vk::raii::PhysicalDevice& pd) {
     auto available = pd.enumerateDeviceExtensionProperties();
-    for (const auto& want : options.deviceExtensions) {
-      bool found = std::any_of(available.begin(), available.end(),
-                               [&](const vk::ExtensionProperties& p) { return want == p.extensionName.data(); });
-      if (!found) return false;
-    }
-    return true;
+    return std::all_of(options.deviceExtensions.begin(), options.deviceExtensions.end(),
+                       [&](const std::string& want) { return listsExtension(available, want); });
   };
-  auto subgroupGaps = [&](const vk::raii::PhysicalDevice& pd) {
-    return missingSubgroupSupport(
-        pd.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties>()
-            .get<vk::PhysicalDeviceSubgroupProperties>());
-  };
+  auto subgroupGaps = [](const vk::raii::PhysicalDevice& pd) { return missingSubgroupSupport(subgroupProperties(pd)); };
 
   int chosen = -1;
   if (!options.device.empty()) {

@@ -349,6 +349,12 @@ void leafPrimitive(uint entry, out uint kind, out uint index) {
   }
 }
 
+// The entries [first, end) of a leaf reference (BvhWideNode).
+void leafEntries(uint leaf, out uint first, out uint end) {
+  first = leaf & kBvhLeafFirstMask;
+  end = first + ((leaf >> kBvhLeafCountShift) & 15u) + 1u; // a leaf holds at least one
+}
+
 // ---- Traversal: every invocation walks the tree on its own ----------------------------------------
 
 // min and max as compare-and-select. NIR's fmin/fmax must return the other operand of a NaN, which
@@ -490,8 +496,9 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
     uint nextLeaf = (postponed != kBvhNoRef && holdsLeaf) ? ref : kBvhNoRef;
     postponed = kBvhNoRef;
     if (leaf != kBvhNoRef) {
-      uint entry = leaf & kBvhLeafFirstMask;
-      uint end = entry + ((leaf >> kBvhLeafCountShift) & 15u) + 1u; // a leaf holds at least one
+      uint entry;
+      uint end;
+      leafEntries(leaf, entry, end);
       while (true) {
         uint kind;
         uint index;
@@ -501,8 +508,7 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
         ++entry;
         if (entry >= end) {
           if (nextLeaf == kBvhNoRef) break;
-          entry = nextLeaf & kBvhLeafFirstMask;
-          end = entry + ((nextLeaf >> kBvhLeafCountShift) & 15u) + 1u;
+          leafEntries(nextLeaf, entry, end);
           nextLeaf = kBvhNoRef;
         }
       }
