@@ -49,7 +49,7 @@ float boxDistance2(vec3 bmin, vec3 bmax) {
 }
 
 void main() {
-  gDynamicZero = stats.pad0;
+  gDynamicZero = stats.zero;
   loadSceneRegisters(); // before any branch (scene.glsl)
   uint tilesX = (frame.imageSize.x + kEntryTileSize - 1u) / kEntryTileSize;
   uint tileRows = (pc.tileSize.y + kEntryTileSize - 1u) / kEntryTileSize;
@@ -64,7 +64,7 @@ void main() {
   vec3 F = frame.cameraForward.xyz;
   vec3 R = frame.cameraRight.xyz;
   vec3 U = frame.cameraUp.xyz;
-  vec2 size = vec2(frame.imageSize.xy);
+  vec2 size = vec2(frame.imageSize);
   float pixel = min(2.0 * length(R) / size.x, 2.0 * length(U) / size.y); // in direction units
   float margin = 0.0625 + 1e-6 * (length(F) + length(R) + length(U)) / pixel;
   vec2 lo = vec2(float((tile % tilesX) * kEntryTileSize), float(pc.imageRow0 + (tile / tilesX) * kEntryTileSize)) - margin;
@@ -101,7 +101,7 @@ void main() {
   int count = 0;
   uint pending[kEntryPointsMax];
   int top = 0;
-  uint root = opaqueUniform(frame.counts2.w);
+  uint root = opaqueUniform(frame.bvhRoot);
   if (root != kBvhNoRef) pending[top++] = root;
   // Invariant: count + top <= kEntryPointsMax. The loop is tested at the bottom (scene.glsl).
   if (top > 0) {

@@ -22,13 +22,13 @@ layout(push_constant) uniform Push { PushConstants pc; };
 layout(constant_id = kSpecCountStats) const bool COUNT_STATS = true;
 
 void main() {
-  gDynamicZero = stats.pad0; // push-constant values pass through opaqueUniform (common.glsl)
+  gDynamicZero = stats.zero; // push-constant values pass through opaqueUniform (common.glsl)
   vec3 background = frame.background.rgb;
   uint samples = opaqueUniform(pc.sampleCount);
   bool accumulate = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u;
   uvec2 local = gl_GlobalInvocationID.xy;
   uvec2 pixel = pc.tileOrigin + local;
-  bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize.xy));
+  bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize));
   uint eyeRays = 0u;
   if (inside) {
     vec3 radiance = vec3(0.0) + vec3(1.0) * background;

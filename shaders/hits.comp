@@ -21,11 +21,11 @@ layout(std430, binding = kBindingStats) readonly buffer StatsBuffer { RayStats s
 layout(push_constant) uniform Push { PushConstants pc; };
 
 void main() {
-  gDynamicZero = stats.pad0;
+  gDynamicZero = stats.zero;
   loadSceneRegisters(); // before any branch (scene.glsl)
   uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (scene.glsl)
   uvec2 pixel = pc.tileOrigin + local;
-  if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize.xy))) return;
+  if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize))) return;
   loadEntryPoints(pixel, pc.imageRow0);
 
   vec3 dir = eyeRayDir(vec2(pixel) + 0.5);
@@ -37,7 +37,7 @@ void main() {
     if (SHADOWS) {
       Surface s = surfaceAt(r, h);
       vec3 ng = dot(s.ng, dir) > 0.0 ? -s.ng : s.ng; // towards the eye
-      vec3 lightPos = loadLight(0u).position.xyz;
+      vec3 lightPos = lightPosition(loadLight(0u));
       if (dot(ng, lightPos - s.p) > 0.0) {
         vec3 origin = ROBUST ? spawnOrigin(s.p, ng, s.errorBound) : s.p; // as localShade (shade.glsl)
         vec3 toLight = lightPos - origin;

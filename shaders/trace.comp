@@ -22,17 +22,6 @@ layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 layout(constant_id = kSpecRefinePass) const bool REFINE_PASS = false;
 
-// Per-invocation counters (gShadowRays lives in shade.glsl).
-uint gEyeRays = 0u;
-uint gReflectionRays = 0u;
-uint gRefractionRays = 0u;
-uint gBailoutSaved = 0u;
-uint gStackOverflow = 0u;
-uint gMaxDepth = 0u;
-uint gRefinedPixels = 0u;
-uint gNonFinite = 0u;
-uint gTruncated = 0u; // counted even without COUNT_STATS: a cut-short tree is a wrong pixel
-
 const uint kRayEye = 0u;
 const uint kRayReflection = 1u;
 const uint kRayRefraction = 2u;
@@ -49,10 +38,10 @@ struct PendingRay {
 // Branch-free: on CPU drivers every branch costs as much as its body.
 void countRay(uint kind, uint depth) {
   if (!COUNT_STATS) return;
-  gEyeRays += uint(kind == kRayEye);
-  gReflectionRays += uint(kind == kRayReflection);
-  gRefractionRays += uint(kind == kRayRefraction);
-  gMaxDepth = max(gMaxDepth, depth);
+  gCount.eyeRays += uint(kind == kRayEye);
+  gCount.reflectionRays += uint(kind == kRayReflection);
+  gCount.refractionRays += uint(kind == kRayRefraction);
+  gCount.maxDepth = max(gCount.maxDepth, depth);
 }
 
 // A branch is worth tracing when its weight is positive and not below the bailout (POV-Ray's
@@ -60,7 +49,7 @@ void countRay(uint kind, uint depth) {
 // and a specialized one follow exactly the same branches.
 bool worthTracing(vec3 weight) {
   float w = maxComponent(weight);
-  return w > 0.0 && w >= frame.knobs.x;
+  return w > 0.0 && w >= frame.bailout;
 }
 
 // Radiance along one eye ray: the whole Whitted tree, depth first. At a dielectric both children
@@ -72,7 +61,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   PendingRay stack[STACK_SIZE];
   int sp = 0;
   PendingRay cur = PendingRay(origin, kRayEye << 16u, dir, vec3(1.0), kEmptyMedia);
-  uint maxDepth = opaqueUniform(frame.imageSize.w);
+  uint maxDepth = opaqueUniform(frame.maxDepth);
   // The loop's own exit leaves nothing pending. llvmpipe ends every loop of an invocation once its
   // SIMD group has run 65535 loop iterations in all; a glass tree cut short that way still has its
   // current ray or stacked branches, and the sample is counted as truncated instead of passing
@@ -86,7 +75,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
     Hit hit = traceScene(r, kInfinity, false, false, depth == 0u); // depth 0: the eye ray
     vec3 w = cur.weight;
     uint medium = REFRACTION ? mediaTop(cur.media) : kNoMedium;
-    if (REFRACTION && medium != kNoMedium) w *= beerLambert(loadMaterial(medium).absorption.rgb, hit.t);
+    if (REFRACTION && medium != kNoMedium) w *= beerLambert(absorptionPerUnit(loadMaterial(medium)), hit.t);
 
     haveNext = false;
     if (hit.kind == kNoHit) {
@@ -100,19 +89,19 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
       radiance += w * localShade(mat, s, ngf, nsf, cur.dir);
 
       if ((REFLECTION || REFRACTION) && depth < maxDepth) {
-        float kr = mat.phong.w;
+        float kr = reflectance(mat);
         float kt = 0.0;
         vec3 tdir = vec3(0.0);
         uvec2 tmedia = cur.media;
-        if (REFRACTION && mat.transmission.x > 0.0) {
-          float trans = mat.transmission.x;
+        if (REFRACTION && transmittance(mat) > 0.0) {
+          float trans = transmittance(mat);
           float n1, n2;
           if (front) {
             n1 = mediumIor(medium);
-            n2 = mat.transmission.y;
+            n2 = refractiveIndex(mat);
             tmedia = mediaPush(cur.media, s.material);
           } else {
-            n1 = mat.transmission.y;
+            n1 = refractiveIndex(mat);
             tmedia = mediaRemove(cur.media, s.material);
             n2 = mediumIor(mediaTop(tmedia));
           }
@@ -124,13 +113,13 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
         }
         vec3 wr = w * kr;
         bool doR = worthTracing(wr);
-        if (COUNT_STATS && !doR && maxComponent(wr) > 0.0) gBailoutSaved++;
+        if (COUNT_STATS && !doR && maxComponent(wr) > 0.0) gCount.bailoutSaved++;
         vec3 wt = vec3(0.0);
         bool doT = false;
         if (REFRACTION) {
           wt = w * kt;
           doT = worthTracing(wt);
-          if (COUNT_STATS && !doT && maxComponent(wt) > 0.0) gBailoutSaved++;
+          if (COUNT_STATS && !doT && maxComponent(wt) > 0.0) gCount.bailoutSaved++;
         }
         uint nextDepth = depth + 1u;
         PendingRay reflected;
@@ -145,7 +134,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
             if (sp < STACK_SIZE) {
               stack[sp++] = reflected;
             } else if (COUNT_STATS) {
-              gStackOverflow++;
+              gCount.stackOverflow++;
             }
           }
           cur = PendingRay(to, nextDepth | (kRayRefraction << 16u), tdir, wt, tmedia);
@@ -165,14 +154,14 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   }
   // Only trees with glass grow exponentially; without REFRACTION a tree is at most max_depth + 1
   // rays, and keeping the check out keeps `haveNext` out of the loop's state (~10 % on the showcase).
-  if (REFRACTION) gTruncated += uint(haveNext || sp != 0);
+  if (REFRACTION) gCount.truncated += uint(haveNext || sp != 0);
   return radiance;
 }
 
 vec3 traceSample(uvec2 pixel, vec2 offset) {
   vec3 radiance = traceRadiance(frame.cameraOrigin.xyz, eyeRayDir(vec2(pixel) + offset));
   if (!isFiniteVec(radiance)) {
-    if (COUNT_STATS) gNonFinite++;
+    if (COUNT_STATS) gCount.nonFinite++;
     radiance = vec3(0.0);
   }
   return radiance;
@@ -200,7 +189,7 @@ vec3 averaged(vec4 v) { return v.w > 0.0 ? v.rgb / v.w : vec3(0.0); }
 vec4 prevPixel(uvec2 p) { return imageLoad(prevTexels, int((p.y - pc.prevRow0) * frame.imageSize.x + p.x)); }
 
 bool needsRefinement(uvec2 pixel) {
-  uvec2 size = frame.imageSize.xy;
+  uvec2 size = frame.imageSize;
   vec3 c = clamp(averaged(prevPixel(pixel)), 0.0, 1.0);
   ivec2 offsets[4] = ivec2[4](ivec2(-1, 0), ivec2(1, 0), ivec2(0, -1), ivec2(0, 1));
   // Selects, not `continue` or `return`: a loop the compiler cannot unroll costs one more whole
@@ -214,7 +203,7 @@ bool needsRefinement(uvec2 pixel) {
     bool counts = q.x >= 0 && q.y >= 0 && q.x < int(size.x) && q.y < int(size.y) &&
                   uint(q.y) >= pc.prevRow0 && uint(q.y) < pc.prevRow0 + pc.prevRows;
     vec3 n = clamp(averaged(prevPixel(uvec2(clamp(q, lo, hi)))), 0.0, 1.0);
-    refine = refine || (counts && maxComponent(abs(n - c)) > frame.knobs.y);
+    refine = refine || (counts && maxComponent(abs(n - c)) > frame.adaptiveThreshold);
   }
   return refine;
 }
@@ -233,14 +222,14 @@ bool needsRefinement(uvec2 pixel) {
 // (160 x 120, depth 3, callgrind); summed four at a time, with every atomic in one elected branch
 // and only the counters the pipeline can count, 2.5 M.
 void flushStats() {
-  if (REFRACTION) ADD_COUNTER(gTruncated, truncated);
+  if (REFRACTION) ADD_COUNTER(gCount.truncated, truncated);
   if (!COUNT_STATS) return;
   const bool BOUNCES = REFLECTION || REFRACTION; // a dielectric reflects too
-  uvec4 rays = subgroupAdd(uvec4(gEyeRays, gShadowRays, gReflectionRays, gBailoutSaved));
+  uvec4 rays = subgroupAdd(uvec4(gCount.eyeRays, gCount.shadowRays, gCount.reflectionRays, gCount.bailoutSaved));
   uvec4 rest = (REFRACTION || REFINE_PASS)
-                   ? subgroupAdd(uvec4(gRefractionRays, gStackOverflow, gRefinedPixels, gNonFinite))
-                   : uvec4(0u, 0u, 0u, subgroupAdd(gNonFinite));
-  uint deepest = BOUNCES ? subgroupMax(gMaxDepth) : 0u;
+                   ? subgroupAdd(uvec4(gCount.refractionRays, gCount.stackOverflow, gCount.refinedPixels, gCount.nonFinite))
+                   : uvec4(0u, 0u, 0u, subgroupAdd(gCount.nonFinite));
+  uint deepest = BOUNCES ? subgroupMax(gCount.maxDepth) : 0u;
   if (subgroupElect()) {
     atomicAdd(stats.eyeRays, rays.x);
     if (SHADOWS) atomicAdd(stats.shadowRays, rays.y);
@@ -259,13 +248,13 @@ void flushStats() {
 }
 
 void main() {
-  gDynamicZero = stats.pad0;
+  gDynamicZero = stats.zero;
   loadSceneRegisters(); // before any branch (scene.glsl)
   uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (scene.glsl)
   uvec2 pixel = pc.tileOrigin + local;
   // The dispatch is rounded up to whole workgroups: invocations past the tile or image do nothing,
   // but still take part in flushStats' subgroup sums.
-  bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize.xy));
+  bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize));
   if (inside) {
     loadEntryPoints(pixel, pc.imageRow0);
     uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
@@ -275,7 +264,7 @@ void main() {
       // split the samples over several dispatches; the later ones accumulate (refined pixels only).
       bool accumulate = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u;
       if (needsRefinement(pixel)) {
-        if (COUNT_STATS && !accumulate) gRefinedPixels++;
+        if (COUNT_STATS && !accumulate) gCount.refinedPixels++;
         vec4 result = vec4(sampleSum(pixel, index, pc.sampleBase, opaqueUniform(pc.sampleCount), false),
                            float(pc.sampleCount));
         if (accumulate) result += imageLoad(imageTexels, int(slot));

@@ -108,7 +108,7 @@ TEST(GpuHostPages, ImportedBuffersRenderWhatTheDriversMemoryRenders) {
   imported.setScene(scene);
   RenderResult a = imported.render(scene.camera, scene.render, {});
   RenderResult aHits = imported.render(scene.camera, scene.render, query);
-  Renderer::HostPageUse use = imported.sceneHostPages();
+  HostPageUse use = imported.sceneHostPages();
   EXPECT_GE(use.bytes, 6u << 20) << "the triangles, 4 MiB or more, live in imported host pages";
   EXPECT_LE(use.hugeBytes, use.bytes);
   test::expectNoValidationMessages();

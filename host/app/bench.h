@@ -16,9 +16,7 @@ struct BenchTimeArgs {
   DeviceFlags device;
   RenderFlags render;
   int runs = 7;
-  bool noSpecialize = false;
-  bool noRowCulling = false;
-  std::string sceneMemory = "auto";
+  KernelFlags kernel;
 };
 
 struct TimedRender {

@@ -53,13 +53,17 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
   auto add = [&](std::string knob, std::string value, std::function<void(RenderSettings&)> apply) {
     p.push_back({std::move(knob), std::move(value), std::move(apply)});
   };
+  // A point setting an enum-valued knob, named by the enum's table.
+  auto addEnum = [&](std::string knob, auto value, auto RenderSettings::*member) {
+    add(std::move(knob), std::string(enumName(value)), [value, member](RenderSettings& s) { s.*member = value; });
+  };
   add("baseline", "scene", [](RenderSettings&) {});
   if (quick) {
     // Seconds, for the test suite: one point per kind of knob.
     add("depth", "0", [](RenderSettings& s) { s.maxDepth = 0; });
     add("bailout", "1/16", [](RenderSettings& s) { s.bailout = 1.0 / 16; });
     add("spp", "4", [](RenderSettings& s) { s.spp = 4; });
-    add("numerics", "naive", [](RenderSettings& s) { s.numerics = Numerics::Naive; });
+    addEnum("numerics", Numerics::Naive, &RenderSettings::numerics);
     return p;
   }
   int maxDepth = f.anyTransmissiveMaterial ? 16 : 8;
@@ -82,12 +86,12 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
       s.antialiasing = Antialiasing::Adaptive;
     });
   }
-  add("numerics", "naive", [](RenderSettings& s) { s.numerics = Numerics::Naive; });
-  add("numerics", "robust", [](RenderSettings& s) { s.numerics = Numerics::Robust; });
-  if (float64) add("precision", "float64", [](RenderSettings& s) { s.precision = Precision::Float64; });
+  addEnum("numerics", Numerics::Naive, &RenderSettings::numerics);
+  addEnum("numerics", Numerics::Robust, &RenderSettings::numerics);
+  if (float64) addEnum("precision", Precision::Float64, &RenderSettings::precision);
   if (f.anyTransmissiveMaterial) {
-    add("fresnel", "schlick", [](RenderSettings& s) { s.fresnel = FresnelMode::Schlick; });
-    add("fresnel", "exact", [](RenderSettings& s) { s.fresnel = FresnelMode::Exact; });
+    addEnum("fresnel", FresnelMode::Schlick, &RenderSettings::fresnel);
+    addEnum("fresnel", FresnelMode::Exact, &RenderSettings::fresnel);
   }
   {
     add("combined", "spp 4, depth 3", [](RenderSettings& s) {
@@ -188,11 +192,9 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     auto row = [&](const std::string& knob, const std::string& value, const RenderSettings& s, const TimedRender& t,
                    const ImageError& e, const ImageError& e1) {
       csv << name << ',' << knob << ",\"" << value << "\"," << s.width << ',' << s.height << ',' << s.spp << ','
-          << s.maxDepth << ',' << fmt(s.bailout) << ',' << (s.numerics == Numerics::Naive ? "naive" : "robust") << ','
-          << (s.precision == Precision::Float64 ? "float64" : "float32") << ','
-          << (s.fresnel == FresnelMode::Schlick ? "schlick" : "exact") << ','
-          << (s.antialiasing == Antialiasing::Adaptive ? "adaptive" : "stratified") << ',' << fmt(t.medianMs) << ','
-          << fmt(t.minMs) << ',' << t.stats.total() << ',' << t.stats.eye << ',' << fmt(e.rmse) << ','
+          << s.maxDepth << ',' << fmt(s.bailout) << ',' << enumName(s.numerics) << ',' << enumName(s.precision) << ','
+          << enumName(s.fresnel) << ',' << enumName(s.antialiasing) << ',' << fmt(t.medianMs) << ',' << fmt(t.minMs)
+          << ',' << t.stats.total() << ',' << t.stats.eye << ',' << fmt(e.rmse) << ','
           << (std::isinf(e.psnr) ? std::string("inf") : fmt(e.psnr)) << ',' << fmt(e.maxAbs) << ','
           << fmt(e.fractionOff) << ',' << e.pixelsOff << ',' << fmt(e1.rmse) << ',' << fmt(e1.fractionOff) << '\n';
       csv.flush();

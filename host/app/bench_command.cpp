@@ -47,11 +47,7 @@ int runBenchTime(const BenchTimeArgs& args) {
     renderer.setScene(scene);
     RenderOptions options;
     options.countStats = false;
-    options.specialize = !args.noSpecialize;
-    options.cullRows = !args.noRowCulling;
-    options.sceneMemory = args.sceneMemory == "uniform"   ? SceneMemory::Uniform
-                          : args.sceneMemory == "storage" ? SceneMemory::Storage
-                                                          : SceneMemory::Auto;
+    applyKernelFlags(args.kernel, options);
     TimedRender t = timeRender(renderer, scene, scene.render, options, 1, args.runs);
     std::printf("%-28s %10.2f %10.2f %10.2f %12llu %10.2f\n", path.filename().string().c_str(), t.medianMs, t.minMs,
                 t.maxMs, static_cast<unsigned long long>(t.stats.total()),

@@ -374,7 +374,7 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
     rows.push_back(row);
     std::printf("%zu triangles: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.triangles, row.buildMs,
                 row.primaryMrays(), row.shadowMrays());
-    Renderer::HostPageUse pages = renderer.sceneHostPages();
+    HostPageUse pages = renderer.sceneHostPages();
     if (pages.bytes > 0) std::printf(", huge pages %zu of %zu MiB", pages.hugeBytes >> 20, pages.bytes >> 20);
     if (embree) {
       std::printf(" | embree: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.embreeBuildMs,

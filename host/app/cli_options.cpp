@@ -32,13 +32,22 @@ void addDeviceFlags(CLI::App& app, DeviceFlags& f) {
                "keep large scene buffers in the driver's memory, not in vkray's own huge pages (for comparison)");
 }
 
-vulkan::ContextOptions contextOptions(const DeviceFlags& f) {
-  vulkan::ContextOptions o;
-  o.device = f.device;
-  o.validation = f.validate;
-  o.synchronizationValidation = f.syncValidate;
-  o.hostPages = !f.noHugePages;
-  return o;
+void addKernelFlags(CLI::App& app, KernelFlags& f) {
+  app.add_flag("--no-specialize", f.noSpecialize, "compile every feature in (for comparison)");
+  app.add_flag("--no-row-culling", f.noRowCulling,
+               "trace rows whose eye rays provably miss everything instead of filling them (for comparison)");
+  app.add_flag("--no-entry-points", f.noEntryPoints,
+               "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
+  app.add_option("--scene-memory", f.sceneMemory,
+                 "where the kernel reads small scenes from: auto, uniform or storage buffers")
+      ->check(CLI::IsMember(enumNameList<SceneMemory>()));
+}
+
+void applyKernelFlags(const KernelFlags& f, RenderOptions& o) {
+  o.specialize = !f.noSpecialize;
+  o.cullRows = !f.noRowCulling;
+  o.entryPoints = !f.noEntryPoints;
+  o.sceneMemory = *parseEnum<SceneMemory>(f.sceneMemory);
 }
 
 void addRenderFlags(CLI::App& app, RenderFlags& f) {
@@ -50,20 +59,20 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
   app.add_option("--bailout", f.bailout, "skip branches whose weight is below this (0: trace all)")
       ->check(realRange(0.0, 1.0));
   app.add_option("--aa", f.antialiasing, "antialiasing: stratified (every pixel gets spp) or adaptive")
-      ->check(CLI::IsMember({"stratified", "adaptive"}));
+      ->check(CLI::IsMember(enumNameList<Antialiasing>()));
   app.add_option("--adaptive-threshold", f.adaptiveThreshold, "adaptive AA: neighbour difference that triggers spp")
       ->check(realRange(0.0, 1.0));
   app.add_option("--numerics", f.numerics, "intersection numerics: robust (default) or naive")
-      ->check(CLI::IsMember({"robust", "naive"}));
+      ->check(CLI::IsMember(enumNameList<Numerics>()));
   app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")
-      ->check(CLI::IsMember({"exact", "schlick"}));
+      ->check(CLI::IsMember(enumNameList<FresnelMode>()));
   app.add_option("--transmissive-shadows", f.transmissiveShadows, "shadows of glass: attenuated or opaque")
-      ->check(CLI::IsMember({"attenuated", "opaque"}));
+      ->check(CLI::IsMember(enumNameList<TransmissiveShadows>()));
   app.add_option("--precision", f.precision,
                  "intersection arithmetic: float32, or float64 (reference; needs shaderFloat64)")
-      ->check(CLI::IsMember({"float32", "float64"}));
+      ->check(CLI::IsMember(enumNameList<Precision>()));
   app.add_option("--bvh", f.bvh, "acceleration structure: auto, on or off")
-      ->check(CLI::IsMember({"auto", "on", "off"}));
+      ->check(CLI::IsMember(enumNameList<BvhMode>()));
 }
 
 void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
@@ -73,16 +82,12 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
   if (f.spp) s.spp = *f.spp;
   if (f.bailout) s.bailout = *f.bailout;
   if (f.adaptiveThreshold) s.adaptiveThreshold = *f.adaptiveThreshold;
-  if (f.antialiasing)
-    s.antialiasing = *f.antialiasing == "adaptive" ? Antialiasing::Adaptive : Antialiasing::Stratified;
-  if (f.numerics) s.numerics = *f.numerics == "naive" ? Numerics::Naive : Numerics::Robust;
-  if (f.fresnel) s.fresnel = *f.fresnel == "schlick" ? FresnelMode::Schlick : FresnelMode::Exact;
-  if (f.transmissiveShadows) {
-    s.transmissiveShadows =
-        *f.transmissiveShadows == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
-  }
-  if (f.precision) s.precision = *f.precision == "float64" ? Precision::Float64 : Precision::Float32;
-  if (f.bvh) s.bvh = *f.bvh == "on" ? BvhMode::On : *f.bvh == "off" ? BvhMode::Off : BvhMode::Auto;
+  if (f.antialiasing) s.antialiasing = *parseEnum<Antialiasing>(*f.antialiasing);
+  if (f.numerics) s.numerics = *parseEnum<Numerics>(*f.numerics);
+  if (f.fresnel) s.fresnel = *parseEnum<FresnelMode>(*f.fresnel);
+  if (f.transmissiveShadows) s.transmissiveShadows = *parseEnum<TransmissiveShadows>(*f.transmissiveShadows);
+  if (f.precision) s.precision = *parseEnum<Precision>(*f.precision);
+  if (f.bvh) s.bvh = *parseEnum<BvhMode>(*f.bvh);
 }
 
 } // namespace vkray

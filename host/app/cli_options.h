@@ -7,18 +7,11 @@
 
 #include <CLI/CLI.hpp>
 
+#include "render/render_options.h"
 #include "scene/scene.h"
-#include "vk/context.h"
+#include "vk/device_flags.h"
 
 namespace vkray {
-
-struct DeviceFlags {
-  std::string device;        // --device
-  bool validate = false;     // --validate
-  bool syncValidate = false; // --sync-validation
-  bool noPipelineCache = false;
-  bool noHugePages = false; // --no-huge-pages
-};
 
 struct RenderFlags {
   std::optional<std::uint32_t> width, height;
@@ -31,9 +24,17 @@ struct RenderFlags {
 // ("not in range 1 to 10000"; CLI::Range prints doubles with six decimals) and refuses NaN.
 CLI::Validator realRange(double lo, double hi);
 
+// The renderer's own switches, for comparison runs: each maps onto a RenderOptions field.
+struct KernelFlags {
+  bool noSpecialize = false;        // --no-specialize
+  bool noRowCulling = false;        // --no-row-culling
+  bool noEntryPoints = false;       // --no-entry-points
+  std::string sceneMemory = "auto"; // --scene-memory, a SceneMemory name
+};
+
 void addDeviceFlags(CLI::App& app, DeviceFlags& flags);
-// The context the flags ask for: device choice, validation, synchronization validation.
-vulkan::ContextOptions contextOptions(const DeviceFlags& flags);
+void addKernelFlags(CLI::App& app, KernelFlags& flags);
+void applyKernelFlags(const KernelFlags& flags, RenderOptions& options);
 void addRenderFlags(CLI::App& app, RenderFlags& flags);
 void applyRenderFlags(const RenderFlags& flags, RenderSettings& settings);
 

@@ -18,11 +18,8 @@ struct RenderArgs {
   bool stats = false;
   bool explain = false;
   bool quiet = false;
-  bool noSpecialize = false;
-  bool noRowCulling = false;
-  bool noEntryPoints = false;
+  KernelFlags kernel;
   double bandMs = 100.0;
-  std::string sceneMemory = "auto";
 };
 
 int runRender(const RenderArgs& args);

@@ -23,19 +23,10 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("--stats", render.stats, "print timings, ray counts and rays per second as 'name: value' lines");
   renderCmd->add_flag("--explain", render.explain, "say which effects the scene calls for and what is compiled out");
   renderCmd->add_flag("-q,--quiet", render.quiet, "no progress bar");
-  renderCmd->add_flag("--no-specialize", render.noSpecialize, "compile every feature in (for comparison)");
-  renderCmd->add_flag("--no-row-culling", render.noRowCulling,
-                      "trace rows whose eye rays provably miss everything instead of filling them (for comparison)");
-  renderCmd->add_flag(
-      "--no-entry-points", render.noEntryPoints,
-      "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
   renderCmd->add_option("--band-ms", render.bandMs, "target GPU time per submission in ms (watchdog safety)")
       ->check(realRange(1.0, 10000.0));
-  renderCmd
-      ->add_option("--scene-memory", render.sceneMemory,
-                   "where the kernel reads small scenes from: auto, uniform or storage buffers")
-      ->check(CLI::IsMember({"auto", "uniform", "storage"}));
   addRenderFlags(*renderCmd, render.render);
+  addKernelFlags(*renderCmd, render.kernel);
   addDeviceFlags(*renderCmd, render.device);
 
   auto* benchCmd = app.add_subcommand("bench", "benchmarks that print figures and ratios");
@@ -45,11 +36,8 @@ int main(int argc, char** argv) {
   benchTimeCmd->add_option("scenes", benchTime.scenes, "scene files")->required();
   benchTimeCmd->add_option("--runs", benchTime.runs, "timed runs per scene (after one warm-up)")
       ->check(CLI::Range(1, 1000));
-  benchTimeCmd->add_flag("--no-specialize", benchTime.noSpecialize, "compile every feature in");
-  benchTimeCmd->add_flag("--no-row-culling", benchTime.noRowCulling, "trace rows that provably see nothing");
-  benchTimeCmd->add_option("--scene-memory", benchTime.sceneMemory, "auto, uniform or storage")
-      ->check(CLI::IsMember({"auto", "uniform", "storage"}));
   addRenderFlags(*benchTimeCmd, benchTime.render);
+  addKernelFlags(*benchTimeCmd, benchTime.kernel);
   addDeviceFlags(*benchTimeCmd, benchTime.device);
 
   BenchSpecializeArgs benchSpec;

@@ -53,6 +53,73 @@ vulkan::Context openContext(const vulkan::ContextOptions& options) {
   }
 }
 
+// Host-side times of one render, beside the renderer's own.
+struct RenderTimesMs {
+  double load = 0.0;
+  double write = 0.0;
+  double total = 0.0;
+};
+
+// `render --stats`: the run as `name: value` lines, which scripts read.
+void printRenderStats(const RenderArgs& args, const Scene& scene, const vulkan::Context& context,
+                      const Renderer& renderer, const vulkan::PipelineCache* cache, const RenderResult& result,
+                      const RenderTimesMs& times) {
+  const auto& info = context.info();
+  const auto& s = result.stats;
+  std::printf("scene: %s\n", args.scene.string().c_str());
+  std::printf("device: %s (%s)\n", info.name.c_str(), info.driver.c_str());
+  std::printf("image: %ux%u\n", scene.render.width, scene.render.height);
+  std::printf("spp: %d\n", scene.render.spp);
+  std::printf("max depth: %d\n", scene.render.maxDepth);
+  for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
+  std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers"
+                                    : renderer.usesUniformShading()
+                                        ? "materials, lights, planes uniform; primitives in storage and texel buffers"
+                                        : "storage and texel buffers");
+  printStat("load", times.load);
+  for (const MeshInfo& m : scene.meshes) {
+    std::printf("mesh %s: %zu triangles, %zu degenerate dropped\n", m.file.c_str(), m.triangleCount,
+                m.droppedDegenerate);
+  }
+  if (renderer.gpuScene().bvh.stats.nodes > 0) {
+    const auto& b = renderer.gpuScene().bvh.stats;
+    printStat("bvh build", b.buildMs);
+    std::printf("bvh nodes: %zu\n", b.nodes);
+    std::printf("bvh depth: %d\n", b.depth);
+    const GpuScene& g = renderer.gpuScene();
+    std::printf("bvh bytes: %zu\n", g.bvhBytes());
+    if (!g.triangles.empty()) {
+      std::printf("bytes per triangle: %.1f\n", static_cast<double>(g.meshBytes()) / g.triangles.size());
+    }
+  }
+  HostPageUse pages = renderer.sceneHostPages();
+  if (pages.bytes > 0) {
+    std::printf("scene buffers in vkray's pages: %.1f MiB, %.1f MiB of them on huge pages\n", pages.bytes / 1048576.0,
+                pages.hugeBytes / 1048576.0);
+  }
+  printStat("upload", renderer.uploadMs());
+  printStat("pipeline", result.timings.pipelineMs);
+  std::printf("pipeline cache: %s\n", !cache                    ? "off"
+                                      : cache->loadedFromDisk() ? "loaded from disk"
+                                                                : "empty (first run on this device)");
+  printStat("trace", result.timings.traceMs);
+  printStat("trace wall", result.timings.traceWallMs);
+  std::printf("bands: %d\n", result.timings.bands);
+  // Rows whose eye rays provably miss everything, filled with the background instead of traced.
+  std::printf("culled rows: %u of %u\n", result.timings.culledRows, scene.render.height);
+  printStat("readback", result.timings.readbackMs);
+  printStat("write", times.write);
+  printStat("total", times.total);
+  for (const auto& [name, value] : s.named()) {
+    std::printf("%.*s: %llu\n", static_cast<int>(name.size()), name.data(), static_cast<unsigned long long>(value));
+  }
+  std::printf("rays: %llu\n", static_cast<unsigned long long>(s.total()));
+  double seconds = result.timings.traceMs * 1e-3;
+  double rps = seconds > 0 ? static_cast<double>(s.total()) / seconds : 0.0;
+  std::printf("rays per second: %.0f\n", rps);
+  std::printf("mrays/s: %.2f\n", rps * 1e-6);
+}
+
 } // namespace
 
 int runRender(const RenderArgs& args) {
@@ -78,19 +145,14 @@ int runRender(const RenderArgs& args) {
   }
 
   Renderer renderer(context, cache.get());
-  renderer.setScene(scene);
+  renderer.setScene(scene, features);
 
   const auto& interrupted = installInterruptFlag();
   ProgressBar bar(!args.quiet);
   RenderOptions options;
-  options.specialize = !args.noSpecialize;
-  options.cullRows = !args.noRowCulling;
-  options.entryPoints = !args.noEntryPoints;
+  applyKernelFlags(args.kernel, options);
   options.countStats = args.stats;
   options.bandBudgetMs = args.bandMs;
-  options.sceneMemory = args.sceneMemory == "uniform"   ? SceneMemory::Uniform
-                        : args.sceneMemory == "storage" ? SceneMemory::Storage
-                                                        : SceneMemory::Auto;
   options.cancel = &interrupted;
   options.progress = [&](const RenderProgress& p) { bar.update(p); };
   RenderResult result = renderer.render(scene.camera, scene.render, options);
@@ -117,66 +179,8 @@ int runRender(const RenderArgs& args) {
   double writeMs = msSince(tw);
 
   if (args.stats) {
-    const auto& info = context.info();
-    const auto& s = result.stats;
-    std::printf("scene: %s\n", args.scene.string().c_str());
-    std::printf("device: %s (%s)\n", info.name.c_str(), info.driver.c_str());
-    std::printf("image: %ux%u\n", scene.render.width, scene.render.height);
-    std::printf("spp: %d\n", scene.render.spp);
-    std::printf("max depth: %d\n", scene.render.maxDepth);
-    for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
-    std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers"
-                                      : renderer.usesUniformShading()
-                                          ? "materials, lights, planes uniform; primitives in storage and texel buffers"
-                                          : "storage and texel buffers");
-    printStat("load", loadMs);
-    for (const MeshInfo& m : scene.meshes) {
-      std::printf("mesh %s: %zu triangles, %zu degenerate dropped\n", m.file.c_str(), m.triangleCount,
-                  m.droppedDegenerate);
-    }
-    if (renderer.gpuScene().bvh.stats.nodes > 0) {
-      const auto& b = renderer.gpuScene().bvh.stats;
-      printStat("bvh build", b.buildMs);
-      std::printf("bvh nodes: %zu\n", b.nodes);
-      std::printf("bvh depth: %d\n", b.depth);
-      const GpuScene& g = renderer.gpuScene();
-      std::printf("bvh bytes: %zu\n", g.bvhBytes());
-      if (!g.triangles.empty()) {
-        std::printf("bytes per triangle: %.1f\n", static_cast<double>(g.meshBytes()) / g.triangles.size());
-      }
-    }
-    Renderer::HostPageUse pages = renderer.sceneHostPages();
-    if (pages.bytes > 0) {
-      std::printf("scene buffers in vkray's pages: %.1f MiB, %.1f MiB of them on huge pages\n", pages.bytes / 1048576.0,
-                  pages.hugeBytes / 1048576.0);
-    }
-    printStat("upload", renderer.uploadMs());
-    printStat("pipeline", result.timings.pipelineMs);
-    std::printf("pipeline cache: %s\n", !cache                    ? "off"
-                                        : cache->loadedFromDisk() ? "loaded from disk"
-                                                                  : "empty (first run on this device)");
-    printStat("trace", result.timings.traceMs);
-    printStat("trace wall", result.timings.traceWallMs);
-    std::printf("bands: %d\n", result.timings.bands);
-    // Rows whose eye rays provably miss everything, filled with the background instead of traced.
-    std::printf("culled rows: %u of %u\n", result.timings.culledRows, scene.render.height);
-    printStat("readback", result.timings.readbackMs);
-    printStat("write", writeMs);
-    printStat("total", msSince(t0));
-    std::printf("eye rays: %llu\n", static_cast<unsigned long long>(s.eye));
-    std::printf("shadow rays: %llu\n", static_cast<unsigned long long>(s.shadow));
-    std::printf("reflection rays: %llu\n", static_cast<unsigned long long>(s.reflection));
-    std::printf("refraction rays: %llu\n", static_cast<unsigned long long>(s.refraction));
-    std::printf("rays: %llu\n", static_cast<unsigned long long>(s.total()));
-    std::printf("bailout saved: %llu\n", static_cast<unsigned long long>(s.bailoutSaved));
-    std::printf("stack overflow: %llu\n", static_cast<unsigned long long>(s.stackOverflow));
-    std::printf("truncated samples: %llu\n", static_cast<unsigned long long>(s.truncated));
-    std::printf("refined pixels: %llu\n", static_cast<unsigned long long>(s.refinedPixels));
-    std::printf("deepest bounce: %u\n", s.maxDepth);
-    double seconds = result.timings.traceMs * 1e-3;
-    double rps = seconds > 0 ? static_cast<double>(s.total()) / seconds : 0.0;
-    std::printf("rays per second: %.0f\n", rps);
-    std::printf("mrays/s: %.2f\n", rps * 1e-6);
+    RenderTimesMs times{loadMs, writeMs, msSince(t0)};
+    printRenderStats(args, scene, context, renderer, cache.get(), result, times);
   }
   return 0;
 }

@@ -27,10 +27,6 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   cmd->add_flag("--no-overlay", a.noOverlay, "start with the overlay hidden (H shows it)");
   cmd->add_flag("--no-ray-counts", a.noRayCounts,
                 "start with the ray counters off (on, they count one frame in 16, which costs 10-20 % more)");
-  cmd->add_flag("--no-specialize", a.noSpecialize, "compile every feature in (for comparison)");
-  cmd->add_flag("--no-row-culling", a.noRowCulling, "trace rows that provably see nothing (for comparison)");
-  cmd->add_flag("--no-entry-points", a.noEntryPoints,
-                "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
   cmd->add_flag("--no-direct-resolve", a.noDirectResolve,
                 "always resolve into an intermediate image and blit it, even where the window's images could "
                 "be written directly (for comparison)");
@@ -40,15 +36,16 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   cmd->add_option("--screenshot-window", a.windowScreenshot,
                   "scripted: also save the window as shown, overlay included (.png or .pfm)");
   addRenderFlags(*cmd, a.render);
+  addKernelFlags(*cmd, a.kernel);
   addDeviceFlags(*cmd, a.device);
   return cmd;
 }
 
 namespace {
 
-// What `view` and `bench view` set alike: the scene, the render flags and the device.
+// What `view` and `bench view` set alike: the scene, the render, kernel and device flags.
 ViewerOptions baseViewerOptions(const std::filesystem::path& scene, const RenderFlags& render,
-                                const DeviceFlags& device) {
+                                const KernelFlags& kernel, const DeviceFlags& device) {
   ViewerOptions o;
   o.scene = scene;
   o.applyOverrides = [flags = render](RenderSettings& s) { applyRenderFlags(flags, s); };
@@ -56,21 +53,15 @@ ViewerOptions baseViewerOptions(const std::filesystem::path& scene, const Render
   o.samplesPerFrame = render.spp;
   o.windowWidth = render.width;
   o.windowHeight = render.height;
-  o.device = device.device;
-  o.validate = device.validate;
-  o.pipelineCache = !device.noPipelineCache;
-  o.hostPages = !device.noHugePages;
+  o.device = device;
+  applyKernelFlags(kernel, o.render);
   return o;
 }
 
 } // namespace
 
 int runView(const ViewArgs& a) {
-  ViewerOptions o = baseViewerOptions(a.scene, a.render, a.device);
-  o.syncValidate = a.device.syncValidate;
-  o.specialize = !a.noSpecialize;
-  o.cullRows = !a.noRowCulling;
-  o.entryPoints = !a.noEntryPoints;
+  ViewerOptions o = baseViewerOptions(a.scene, a.render, a.kernel, a.device);
   o.directResolve = !a.noDirectResolve;
   o.vsync = !a.noVsync;
   o.renderScale = a.scale;
@@ -102,8 +93,8 @@ CLI::App* addBenchViewCommand(CLI::App& bench, BenchViewArgs& a) {
   cmd->add_option("--frames", a.frames, "timed frames per row (after 5 warm-up frames)")
       ->check(CLI::Range(1u, 100000u));
   cmd->add_option("--spin", a.spin, "degrees the camera orbits per frame in the moving rows");
-  cmd->add_flag("--no-row-culling", a.noRowCulling, "trace rows that provably see nothing (for comparison)");
   addRenderFlags(*cmd, a.render);
+  addKernelFlags(*cmd, a.kernel);
   addDeviceFlags(*cmd, a.device);
   return cmd;
 }
@@ -127,14 +118,13 @@ int runBenchView(const BenchViewArgs& a) {
   for (const auto& path : a.scenes) {
     bool header = false;
     for (const Row& row : rows) {
-      ViewerOptions o = baseViewerOptions(path, a.render, a.device);
+      ViewerOptions o = baseViewerOptions(path, a.render, a.kernel, a.device);
       o.vsync = false; // the frame rate of the work, not of the display
       o.countStats = row.counters;
       o.overlay = row.overlay;
       o.spinDegrees = row.moving ? a.spin : 0.0;
       o.motionScale = row.motionScale;
       o.renderScale = row.scale;
-      o.cullRows = !a.noRowCulling;
       o.frames = a.frames + 5; // the viewer leaves the first 5 out of its figures
       ViewerSummary v;
       o.summary = &v;

@@ -20,9 +20,7 @@ struct ViewArgs {
   bool noVsync = false;
   bool noOverlay = false;
   bool noRayCounts = false;
-  bool noSpecialize = false;
-  bool noRowCulling = false;
-  bool noEntryPoints = false;
+  KernelFlags kernel;
   bool noDirectResolve = false;
   bool stats = false;
   std::uint32_t frames = 0;
@@ -41,7 +39,7 @@ struct BenchViewArgs {
   RenderFlags render;
   std::uint32_t frames = 40; // timed frames per row, after the warm-up
   double spin = 2.0;         // degrees per frame in the moving rows
-  bool noRowCulling = false;
+  KernelFlags kernel;
 };
 
 // Registers the `view` subcommand's options on `app`, writing into `args`.

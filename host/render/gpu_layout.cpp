@@ -20,8 +20,11 @@ static_assert(offsetof(BvhNode, offset) == 12 && offsetof(BvhNode, boundsMax) ==
               offsetof(BvhNode, countAxis) == 28);
 static_assert(sizeof(BvhWideNode) == 64 && offsetof(BvhWideNode, ref1) == 28 && offsetof(BvhWideNode, max1) == 48);
 static_assert(sizeof(FrameParams) == 11 * 16);
-static_assert(offsetof(FrameParams, knobs) == 112 && offsetof(FrameParams, imageSize) == 128);
-static_assert(offsetof(FrameParams, counts) == 144 && offsetof(FrameParams, counts2) == 160);
+static_assert(offsetof(FrameParams, bailout) == 112 && offsetof(FrameParams, adaptiveThreshold) == 116);
+static_assert(offsetof(FrameParams, imageSize) == 128 && offsetof(FrameParams, maxDepth) == 140);
+static_assert(offsetof(FrameParams, sphereCount) == 144 && offsetof(FrameParams, polygonCount) == 156);
+static_assert(offsetof(FrameParams, lightCount) == 160 && offsetof(FrameParams, occluderPlaneCount) == 168);
+static_assert(offsetof(FrameParams, bvhRoot) == 172);
 static_assert(sizeof(RayStats) == 48);
 static_assert(sizeof(SceneUbo) <= 65536, "the packed scene must fit the smallest maxUniformBufferRange");
 static_assert(sizeof(PushConstants) == 48 && offsetof(PushConstants, pass) == 16 &&

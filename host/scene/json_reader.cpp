@@ -302,10 +302,14 @@ std::string JsonNode::string() const {
 }
 
 std::string JsonNode::choice(std::initializer_list<std::string_view> options) const {
+  return choice(std::vector<std::string>(options.begin(), options.end()));
+}
+
+std::string JsonNode::choice(const std::vector<std::string>& options) const {
   std::string s = string();
   if (std::find(options.begin(), options.end(), s) != options.end()) return s;
   std::string list;
-  for (auto o : options) list += (list.empty() ? "'" : ", '") + std::string(o) + "'";
+  for (const auto& o : options) list += (list.empty() ? "'" : ", '") + o + "'";
   fail("must be one of " + list + ", got '" + s + "'");
 }
 

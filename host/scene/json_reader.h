@@ -11,6 +11,8 @@
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
+#include "util/enum_names.h"
+
 namespace vkray {
 
 class JsonNode {
@@ -50,6 +52,9 @@ public:
   std::string string() const;
   // One of the listed strings.
   std::string choice(std::initializer_list<std::string_view> options) const;
+  std::string choice(const std::vector<std::string>& options) const;
+  // The value of an enum named by the string, through the enum's name table (util/enum_names.h).
+  template <typename E> E enumValue() const { return *parseEnum<E>(choice(enumNameList<E>())); }
 
   glm::dvec3 vec3() const;
   glm::dvec3 color() const; // 3 numbers >= 0, or a "#rrggbb" sRGB string

@@ -11,6 +11,8 @@
 
 #include <glm/glm.hpp>
 
+#include "util/enum_names.h"
+
 namespace vkray {
 
 // Right-handed, as glTF: a camera at the origin looking down -z with up +y sees +x on the right.
@@ -27,6 +29,31 @@ enum class TransmissiveShadows { Attenuated, Opaque };
 enum class Antialiasing { Stratified, Adaptive };
 enum class BvhMode { Auto, On, Off };
 enum class Precision { Float32, Float64 }; // arithmetic of ray/surface intersection
+
+// The names of the knobs' values in scene files, on the command line, in the overlay and the benches.
+template <> struct EnumNames<Numerics> {
+  static constexpr std::array<EnumName<Numerics>, 2> values{{{Numerics::Robust, "robust"}, {Numerics::Naive, "naive"}}};
+};
+template <> struct EnumNames<FresnelMode> {
+  static constexpr std::array<EnumName<FresnelMode>, 2> values{
+      {{FresnelMode::Exact, "exact"}, {FresnelMode::Schlick, "schlick"}}};
+};
+template <> struct EnumNames<TransmissiveShadows> {
+  static constexpr std::array<EnumName<TransmissiveShadows>, 2> values{
+      {{TransmissiveShadows::Attenuated, "attenuated"}, {TransmissiveShadows::Opaque, "opaque"}}};
+};
+template <> struct EnumNames<Antialiasing> {
+  static constexpr std::array<EnumName<Antialiasing>, 2> values{
+      {{Antialiasing::Stratified, "stratified"}, {Antialiasing::Adaptive, "adaptive"}}};
+};
+template <> struct EnumNames<BvhMode> {
+  static constexpr std::array<EnumName<BvhMode>, 3> values{
+      {{BvhMode::Auto, "auto"}, {BvhMode::On, "on"}, {BvhMode::Off, "off"}}};
+};
+template <> struct EnumNames<Precision> {
+  static constexpr std::array<EnumName<Precision>, 2> values{
+      {{Precision::Float32, "float32"}, {Precision::Float64, "float64"}}};
+};
 
 // Accuracy knobs; every one can also be set on the command line.
 struct RenderSettings {

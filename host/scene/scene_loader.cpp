@@ -58,32 +58,17 @@ void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sa
 
 void readRender(const JsonNode& node, RenderSettings& r) {
   node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics", "fresnel",
-                  "transmissive_shadows", "bvh"});
+                  "transmissive_shadows", "precision", "bvh"});
   if (auto v = node.find("max_depth")) r.maxDepth = static_cast<int>(v->integer(0, kMaxDepthLimit));
   if (auto v = node.find("spp")) r.spp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("bailout")) r.bailout = v->number(0.0, 1.0);
-  if (auto v = node.find("antialiasing")) {
-    r.antialiasing =
-        v->choice({"stratified", "adaptive"}) == "adaptive" ? Antialiasing::Adaptive : Antialiasing::Stratified;
-  }
+  if (auto v = node.find("antialiasing")) r.antialiasing = v->enumValue<Antialiasing>();
   if (auto v = node.find("adaptive_threshold")) r.adaptiveThreshold = v->number(0.0, 1.0);
-  if (auto v = node.find("numerics")) {
-    r.numerics = v->choice({"robust", "naive"}) == "naive" ? Numerics::Naive : Numerics::Robust;
-  }
-  if (auto v = node.find("fresnel")) {
-    r.fresnel = v->choice({"exact", "schlick"}) == "schlick" ? FresnelMode::Schlick : FresnelMode::Exact;
-  }
-  if (auto v = node.find("transmissive_shadows")) {
-    r.transmissiveShadows =
-        v->choice({"attenuated", "opaque"}) == "opaque" ? TransmissiveShadows::Opaque : TransmissiveShadows::Attenuated;
-  }
-  if (auto v = node.find("precision")) {
-    r.precision = v->choice({"float32", "float64"}) == "float64" ? Precision::Float64 : Precision::Float32;
-  }
-  if (auto v = node.find("bvh")) {
-    std::string mode = v->choice({"auto", "on", "off"});
-    r.bvh = mode == "on" ? BvhMode::On : mode == "off" ? BvhMode::Off : BvhMode::Auto;
-  }
+  if (auto v = node.find("numerics")) r.numerics = v->enumValue<Numerics>();
+  if (auto v = node.find("fresnel")) r.fresnel = v->enumValue<FresnelMode>();
+  if (auto v = node.find("transmissive_shadows")) r.transmissiveShadows = v->enumValue<TransmissiveShadows>();
+  if (auto v = node.find("precision")) r.precision = v->enumValue<Precision>();
+  if (auto v = node.find("bvh")) r.bvh = v->enumValue<BvhMode>();
 }
 
 Material readMaterial(const JsonNode& node, const std::string& name) {

@@ -46,6 +46,24 @@ bool comboEnum(const char* label, E& value, std::initializer_list<std::pair<E, c
   return changed;
 }
 
+// The same for an enum with a name table (util/enum_names.h).
+template <typename E> bool comboEnum(const char* label, E& value) {
+  const char* current = "";
+  for (const auto& entry : EnumNames<E>::values)
+    if (entry.value == value) current = entry.name.data();
+  bool changed = false;
+  if (ImGui::BeginCombo(label, current)) {
+    for (const auto& entry : EnumNames<E>::values) {
+      if (ImGui::Selectable(entry.name.data(), entry.value == value) && entry.value != value) {
+        value = entry.value;
+        changed = true;
+      }
+    }
+    ImGui::EndCombo();
+  }
+  return changed;
+}
+
 // Everything ImGui_ImplVulkan_RenderDrawData draws from, as bytes: equal bytes, equal pixels.
 void drawDataBytes(const ImDrawData* data, bool visible, std::vector<unsigned char>& out) {
   out.clear();
@@ -232,15 +250,11 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
   }
   if (settings.countStats && ImGui::CollapsingHeader("Rays per frame", ImGuiTreeNodeFlags_DefaultOpen)) {
     const RayStats& s = m.raysPerFrame;
-    auto row = [](const char* name, std::uint64_t v) { ImGui::Text("%-15s %12" PRIu64, name, v); };
-    row("eye", s.eye);
-    row("shadow", s.shadow);
-    row("reflection", s.reflection);
-    row("refraction", s.refraction);
-    row("total", s.total());
-    row("bailout saved", s.bailoutSaved);
-    row("stack overflow", s.stackOverflow);
-    row("deepest bounce", s.maxDepth);
+    auto row = [](std::string_view name, std::uint64_t v) {
+      ImGui::Text("%-18.*s %12" PRIu64, static_cast<int>(name.size()), name.data(), v);
+    };
+    for (const auto& [name, value] : s.named()) row(name, value);
+    row("rays", s.total());
   }
   if (ImGui::CollapsingHeader("Features")) {
     for (const auto& line : m.features) ImGui::TextWrapped("%s", line.c_str());
@@ -254,10 +268,9 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
     int maxSamples = static_cast<int>(settings.maxSamples);
     if (ImGui::InputInt("max samples", &maxSamples, 64, 1024))
       settings.maxSamples = static_cast<std::uint32_t>(std::clamp<long long>(maxSamples, 1, kMaxSpp * 16));
-    comboEnum("numerics", r.numerics, {{Numerics::Robust, "robust"}, {Numerics::Naive, "naive"}});
-    comboEnum("fresnel", r.fresnel, {{FresnelMode::Exact, "exact"}, {FresnelMode::Schlick, "schlick"}});
-    comboEnum("glass shadows", r.transmissiveShadows,
-              {{TransmissiveShadows::Attenuated, "attenuated"}, {TransmissiveShadows::Opaque, "opaque"}});
+    comboEnum("numerics", r.numerics);
+    comboEnum("fresnel", r.fresnel);
+    comboEnum("glass shadows", r.transmissiveShadows);
     comboEnum("resolution", settings.renderScale, {{1.0, "100 %"}, {0.5, "50 %"}, {0.25, "25 %"}});
     comboEnum("while moving", settings.motionScale, {{1.0, "100 %"}, {0.5, "50 %"}, {0.25, "25 %"}});
     ImGui::Checkbox("shadows", &settings.effects.shadows);

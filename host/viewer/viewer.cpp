@@ -285,11 +285,8 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   r.spp = settings_.samplesPerFrame;
   // Progressive sampling already antialiases every pixel; adaptive refinement is a headless pass.
   r.antialiasing = Antialiasing::Stratified;
-  RenderOptions options;
+  RenderOptions options = o_.render;
   options.progressive = true;
-  options.specialize = o_.specialize;
-  options.cullRows = o_.cullRows;
-  options.entryPoints = o_.entryPoints;
   options.countStats = settings_.countStats;
   renderer_.prepare(camera_.camera(), r, options);
   presenter_.bind(renderer_.imageBuffer(), renderer_.imageTexelView(), size);
@@ -313,14 +310,7 @@ void FrameLoop::publishStats(bool force) {
   const std::uint32_t n = countedInInterval_;
   if (n > 0) {
     const RayStats& s = intervalRays_;
-    raysPerFrame_ = RayStats();
-    raysPerFrame_.eye = s.eye / n;
-    raysPerFrame_.shadow = s.shadow / n;
-    raysPerFrame_.reflection = s.reflection / n;
-    raysPerFrame_.refraction = s.refraction / n;
-    raysPerFrame_.bailoutSaved = s.bailoutSaved / n;
-    raysPerFrame_.stackOverflow = s.stackOverflow / n;
-    raysPerFrame_.maxDepth = s.maxDepth;
+    raysPerFrame_ = s.perFrame(n);
     // The counted frames' rays per frame, over the interval's average trace time.
     const double traceMs = interval_.per(interval_.gpu.trace, interval_.gpuFrames);
     raysPerSecond_ = traceMs > 0.0 ? static_cast<double>(s.total()) / n / (traceMs * 1e-3) : 0.0;
@@ -700,11 +690,7 @@ int runViewer(const ViewerOptions& o) {
   Window window(glfw, o.windowWidth.value_or(scene.render.width), o.windowHeight.value_or(scene.render.height),
                 "vkray - " + o.scene.filename().string());
 
-  vulkan::ContextOptions co;
-  co.validation = o.validate;
-  co.synchronizationValidation = o.syncValidate;
-  co.device = o.device;
-  co.hostPages = o.hostPages;
+  vulkan::ContextOptions co = contextOptions(o.device);
   co.instanceExtensions = glfw.requiredInstanceExtensions();
   co.deviceExtensions = {VK_KHR_SWAPCHAIN_EXTENSION_NAME};
   // The queue also blits and draws the overlay; whether it can present to this window is checked
@@ -714,7 +700,7 @@ int runViewer(const ViewerOptions& o) {
   };
   vulkan::Context context(co);
   std::unique_ptr<vulkan::PipelineCache> cache;
-  if (o.pipelineCache) {
+  if (!o.device.noPipelineCache) {
     cache = std::make_unique<vulkan::PipelineCache>(context, vulkan::PipelineCache::defaultFile(context));
   }
   FrameLoop loop(o, window, context, cache.get(), watcher, std::move(scene));

@@ -11,6 +11,7 @@
 
 #include "render/renderer.h"
 #include "scene/scene.h"
+#include "vk/device_flags.h"
 
 namespace vkray {
 
@@ -46,14 +47,8 @@ struct ViewerOptions {
   std::function<void(RenderSettings&)> applyOverrides;
   std::optional<int> samplesPerFrame; // --spp; default 1 (the scene's spp is a headless setting)
 
-  std::string device;
-  bool validate = false;
-  bool syncValidate = false;
-  bool pipelineCache = true;
-  bool hostPages = true; // large scene buffers in vkray's own huge pages (--no-huge-pages: off)
-  bool specialize = true;
-  bool cullRows = true;    // RenderOptions::cullRows
-  bool entryPoints = true; // RenderOptions::entryPoints
+  DeviceFlags device;   // the context (contextOptions) and the pipeline cache
+  RenderOptions render; // specialize, cullRows, entryPoints, sceneMemory; the viewer sets the rest per frame
 
   bool vsync = true;
   bool directResolve = true;                // the resolve pass writes the swapchain image where it can (presenter.h)

@@ -14,9 +14,9 @@ struct Ray {
 // Lavapipe (Mesa 22.3) re-specializes a shader at dispatch time on uniform values that decide a
 // branch or a loop ("inline uniforms"): it recompiles on first use, and it crashes when the value
 // comes from push constants. vkray specializes explicitly (specialization constants), so every
-// uniform-only condition goes through this factor the pass cannot see through: the dispatch's z
-// size, which the host always sets to 1.
-uint gDynamicZero = 0u; // set from a buffer at the start of main()
+// uniform-only condition goes through this factor the pass cannot see through: a zero read from
+// the statistics buffer (RayStats.zero, which the host keeps 0) at the start of main().
+uint gDynamicZero = 0u;
 uint opaqueUniform(uint v) { return v + gDynamicZero; }
 
 // sgn(x) in {-1, +1}: GLSL's sign(0) is 0, which would turn the stable quadratic's q into 0.

@@ -6,8 +6,18 @@
 #include "optics.glsl"
 #include "scene.glsl"
 
-// Ray counters of this invocation, summed per workgroup at the end of the kernel (trace.comp).
-uint gShadowRays = 0u;
+// This invocation's ray counters (the list in shared/gpu_types.h), summed per subgroup and added to
+// the statistics buffer at the end of the kernel (trace.comp, flushStats). `truncated` is counted
+// even without COUNT_STATS: a cut-short tree is a wrong pixel.
+#define VKRAY_COUNTER_FIELD(host, gpu, label, combine) uint gpu;
+struct RayCounts {
+  VKRAY_RAY_COUNTERS(VKRAY_COUNTER_FIELD)
+  uint listEnd; // unused: takes the constructor's last argument (a macro list cannot drop its last comma)
+};
+#undef VKRAY_COUNTER_FIELD
+#define VKRAY_COUNTER_ZERO(host, gpu, label, combine) 0u,
+RayCounts gCount = RayCounts(VKRAY_RAY_COUNTERS(VKRAY_COUNTER_ZERO) 0u);
+#undef VKRAY_COUNTER_ZERO
 
 const int kMaxShadowCrossings = 8; // transmissive surfaces a shadow ray passes before giving up
 
@@ -59,7 +69,7 @@ uvec2 mediaRemove(uvec2 m, uint id) {
   return found < 0 ? m : closed;
 }
 
-float mediumIor(uint id) { return id == kNoMedium ? 1.0 : loadMaterial(id).transmission.y; }
+float mediumIor(uint id) { return id == kNoMedium ? 1.0 : refractiveIndex(loadMaterial(id)); }
 
 // Beer-Lambert attenuation over a distance; a zero coefficient never meets an infinite distance.
 vec3 beerLambert(vec3 sigma, float dist) {
@@ -72,14 +82,14 @@ vec3 beerLambert(vec3 sigma, float dist) {
 // surface by more than the hit point's error: a floor at y = 0 would otherwise flicker between two
 // cells as rounding puts its hit points on either side of the cell boundary.
 vec3 baseColor(Material mat, Surface s) {
-  if (!CHECKER) return mat.color.rgb;
-  float scale = mat.color2.a;
+  if (!CHECKER) return baseColor(mat);
+  float scale = checkerSize(mat);
   vec3 offset = frame.worldOffset.xyz;
   float margin = 2.0 * s.errorBound + 4.0 * 1.2e-7 * (maxComponent(abs(offset)) + maxComponent(abs(s.p)));
   vec3 q = (s.p + offset - s.ng * margin) / max(scale, 1e-30);
   float cells = floor(q.x) + floor(q.y) + floor(q.z);
   bool odd = cells - 2.0 * floor(0.5 * cells) != 0.0;
-  return (scale > 0.0 && odd) ? mat.color2.rgb : mat.color.rgb;
+  return (scale > 0.0 && odd) ? checkerColor(mat) : baseColor(mat);
 }
 
 // Fraction of a light's colour that reaches `origin` (already offset off the surface): 0 or 1 for
@@ -94,7 +104,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   if (SHADOW_MODE == kShadowsOpaque) {
     // An origin at the light (dist 0) is lit; its NaN direction meets nothing. Selects, not an
     // early return: on CPU drivers a return masks all the code after it.
-    if (COUNT_STATS) gShadowRays += uint(dist > 0.0);
+    if (COUNT_STATS) gCount.shadowRays += uint(dist > 0.0);
     Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true, false);
     return (dist <= 0.0 || h.kind == kNoHit) ? vec3(1.0) : vec3(0.0);
   }
@@ -105,21 +115,21 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   float enteredAt = 0.0;
   int crossing = 0;
   while (true) { // tested at the bottom (see traverseBvh in scene.glsl)
-    if (COUNT_STATS) gShadowRays++;
+    if (COUNT_STATS) gCount.shadowRays++;
     TraceRay r = makeTraceRay(o, dir);
     float remaining = length(lightPos - o);
     Hit h = traceScene(r, remaining, false, true, false);
     if (h.kind == kNoHit) return transmit;
     Surface s = surfaceAt(r, h);
     Material m = loadMaterial(s.material);
-    if (m.transmission.x <= 0.0) return vec3(0.0);
-    transmit *= m.transmission.x;
+    if (transmittance(m) <= 0.0) return vec3(0.0);
+    transmit *= transmittance(m);
     float here = travelled + h.t;
     bool entering = dot(s.ng, dir) < 0.0;
     if (entering) {
       enteredAt = here;
     } else {
-      transmit *= beerLambert(m.absorption.rgb, here - enteredAt);
+      transmit *= beerLambert(absorptionPerUnit(m), here - enteredAt);
     }
     if (maxComponent(transmit) <= 0.0) return vec3(0.0);
     vec3 side = entering ? -s.ng : s.ng; // continue on the far side of the surface
@@ -135,16 +145,16 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
 // ngf/nsf: geometric and shading normals turned towards the incoming ray.
 vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
   vec3 base = baseColor(mat, s);
-  vec3 color = mat.color.a * base * frame.ambientLight.rgb;
-  float kd = mat.phong.x;
-  float ks = mat.phong.y;
-  float shininess = mat.phong.z;
+  vec3 color = ambientFactor(mat) * base * frame.ambientLight.rgb;
+  float kd = diffuseFactor(mat);
+  float ks = specularFactor(mat);
+  float shininess = phongExponent(mat);
   bool lightable = kd > 0.0 || ks > 0.0; // else nothing to light: no shadow rays either
   vec3 v = -rayDir;
   vec3 origin = ROBUST ? spawnOrigin(s.p, ngf, s.errorBound) : s.p;
   for (uint i = 0u; i < lightCount(); ++i) {
     Light light = loadLight(i);
-    vec3 toLight = light.position.xyz - s.p;
+    vec3 toLight = lightPosition(light) - s.p;
     float dist = length(toLight);
     vec3 l = toLight / dist;
     float ndotl = dot(nsf, l);
@@ -153,12 +163,12 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
     bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0;
     if (lit) {
       vec3 visible = vec3(1.0);
-      if (SHADOWS && light.position.w > 0.0) visible = shadowTransmittance(origin, light.position.xyz);
+      if (SHADOWS && castsShadows(light)) visible = shadowTransmittance(origin, lightPosition(light));
       vec3 r = reflect(-l, nsf);
       float rv = dot(r, v);
       // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
       float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
-      if (maxComponent(visible) > 0.0) color += visible * light.color.rgb * (kd * ndotl * base + spec);
+      if (maxComponent(visible) > 0.0) color += visible * lightColor(light) * (kd * ndotl * base + spec);
     }
   }
   return color;

@@ -208,6 +208,93 @@ struct BvhWideNode {
   uint unused1;
 };
 
+#ifndef __cplusplus
+// Named reads of the records above, so kernels say what they read, not which vec4 slot holds it.
+vec3 baseColor(Material m) {
+  return m.color.rgb;
+}
+float ambientFactor(Material m) {
+  return m.color.a;
+}
+vec3 checkerColor(Material m) {
+  return m.color2.rgb;
+}
+float checkerSize(Material m) {
+  return m.color2.a;
+} // 0: no checker
+float diffuseFactor(Material m) {
+  return m.phong.x;
+}
+float specularFactor(Material m) {
+  return m.phong.y;
+}
+float phongExponent(Material m) {
+  return m.phong.z;
+}
+float reflectance(Material m) {
+  return m.phong.w;
+}
+float transmittance(Material m) {
+  return m.transmission.x;
+}
+float refractiveIndex(Material m) {
+  return m.transmission.y;
+}
+vec3 absorptionPerUnit(Material m) {
+  return m.absorption.rgb;
+}
+
+vec3 lightPosition(Light l) {
+  return l.position.xyz;
+}
+bool castsShadows(Light l) {
+  return l.position.w > 0.0;
+}
+vec3 lightColor(Light l) {
+  return l.color.rgb;
+}
+
+vec3 sphereCenter(Sphere s) {
+  return s.centerRadius.xyz;
+}
+float sphereRadius(Sphere s) {
+  return s.centerRadius.w;
+}
+uint sphereMaterial(Sphere s) {
+  return s.meta.x;
+}
+
+vec3 planeNormal(Plane p) {
+  return p.normalOffset.xyz;
+}
+float planeOffset(Plane p) {
+  return p.normalOffset.w;
+}
+uint planeMaterial(Plane p) {
+  return p.meta.x;
+}
+
+uint triangleMaterial(Triangle t) {
+  return floatBitsToUint(t.v0.w);
+}
+uint triangleNormalBase(Triangle t) {
+  return floatBitsToUint(t.v1.w);
+} // kNoNormals: flat
+
+vec3 polygonNormal(Polygon q) {
+  return q.plane.xyz;
+}
+uint polygonFirstVertex(Polygon q) {
+  return q.meta.x;
+}
+uint polygonVertexCount(Polygon q) {
+  return q.meta.y;
+}
+uint polygonMaterial(Polygon q) {
+  return q.meta.z;
+}
+#endif
+
 struct SceneUbo {
   Material materials[kUboMaterials];
   Light lights[kUboLights];
@@ -219,34 +306,56 @@ struct SceneUbo {
 };
 
 struct FrameParams {
-  vec4 cameraForward; // xyz: unit view direction
-  vec4 cameraRight;   // xyz: right * tan(fov_y / 2) * aspect
-  vec4 cameraUp;      // xyz: up * tan(fov_y / 2)
-  vec4 cameraOrigin;  // xyz: eye position (camera-relative frame: 0); w: unused
-  vec4 worldOffset;   // xyz: world position of the frame's origin (checker patterns use world space)
-  vec4 background;    // rgb: colour of rays that miss
-  vec4 ambientLight;  // rgb: global ambient light
-  vec4 knobs;         // x: bailout weight; y: adaptive AA threshold; zw: unused
-  uvec4 imageSize;    // x: width; y: height; z: unused; w: max depth (bounces after the eye ray)
-  uvec4 counts;       // x: spheres; y: planes; z: triangles; w: polygons
-  uvec4 counts2;      // x: lights; y: unused; z: planes that can cast shadows (first in Planes[]);
-                      // w: the BVH root's reference (BvhWideNode)
+  vec4 cameraForward;      // xyz: unit view direction
+  vec4 cameraRight;        // xyz: right * tan(fov_y / 2) * aspect
+  vec4 cameraUp;           // xyz: up * tan(fov_y / 2)
+  vec4 cameraOrigin;       // xyz: eye position (camera-relative frame: 0); w: unused
+  vec4 worldOffset;        // xyz: world position of the frame's origin (checker patterns use world space)
+  vec4 background;         // rgb: colour of rays that miss
+  vec4 ambientLight;       // rgb: global ambient light
+  float bailout;           // branches with a smaller weight are not traced
+  float adaptiveThreshold; // adaptive AA: neighbour difference that triggers refinement
+  float unusedKnob0;
+  float unusedKnob1;
+  uvec2 imageSize; // width, height in pixels
+  uint unused0;
+  uint maxDepth; // bounces after the eye ray
+  uint sphereCount;
+  uint planeCount;
+  uint triangleCount;
+  uint polygonCount;
+  uint lightCount;
+  uint unused1;
+  uint occluderPlaneCount; // planes that can cast shadows (first in Planes[])
+  uint bvhRoot;            // the BVH root's reference (BvhWideNode)
 };
 
+// ---- Ray counters --------------------------------------------------------------------------------
+// The one list of the kernel's counters. X(host field, GPU field, name printed by --stats, how
+// counts from several dispatches combine: Sum or Max). It generates the GPU struct below and, on the
+// host (render/ray_stats.h), the statistics struct, its copy from the GPU, its sums and its
+// printing. A new counter is a line here, an increment in the kernel and its flush (trace.comp).
+#define VKRAY_RAY_COUNTERS(X)                                                                                          \
+  X(eye, eyeRays, "eye rays", Sum)                                                                                     \
+  X(shadow, shadowRays, "shadow rays", Sum)                                                                            \
+  X(reflection, reflectionRays, "reflection rays", Sum)                                                                \
+  X(refraction, refractionRays, "refraction rays", Sum)                                                                \
+  X(bailoutSaved, bailoutSaved, "bailout saved", Sum)    /* branches below the bailout weight */                       \
+  X(stackOverflow, stackOverflow, "stack overflow", Sum) /* branches dropped: explicit stack full */                   \
+  X(truncated, truncated, "truncated samples", Sum)      /* cut short by the driver's loop limit */                    \
+  X(refinedPixels, refinedPixels, "refined pixels", Sum) /* adaptive AA: pixels supersampled */                        \
+  X(nonFinite, nonFinite, "non-finite samples", Sum)     /* NaN/Inf replaced by black; expected 0 */                   \
+  X(maxDepth, maxDepth, "deepest bounce", Max)
+
+#define VKRAY_GPU_COUNTER_FIELD(host, gpu, label, combine) uint gpu;
 struct RayStats {
-  uint eyeRays;
-  uint shadowRays;
-  uint reflectionRays;
-  uint refractionRays;
-  uint bailoutSaved;  // branches not traced because their weight fell below the bailout
-  uint stackOverflow; // branches dropped because the explicit stack was full
-  uint maxDepth;      // deepest bounce traced
-  uint refinedPixels; // adaptive AA: pixels supersampled
-  uint nonFinite;     // samples whose radiance was NaN/Inf (replaced by black); expected 0
-  uint pad0;
-  uint truncated; // samples whose glass tree the driver cut short (llvmpipe's loop limit); always counted
-  uint pad2;
+  VKRAY_RAY_COUNTERS(VKRAY_GPU_COUNTER_FIELD)
+  // Always 0. The kernels read it at run time into gDynamicZero (common.glsl), a zero the compiler
+  // cannot see through.
+  uint zero;
+  uint unused;
 };
+#undef VKRAY_GPU_COUNTER_FIELD
 
 // The image buffers hold a window of whole rows: Image[] starts at row imageRow0 and PrevImage[] at
 // row prevRow0, so images larger than one storage buffer can be traced band by band.

@@ -1,0 +1,77 @@
+// What a caller asks of the Renderer besides the scene's settings (which kernel, which optimizations,
+// the band budget, progress and cancellation) and what a render returns.
+#pragma once
+
+#include <atomic>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "image/image.h"
+#include "render/ray_stats.h"
+#include "scene/features.h"
+#include "util/enum_names.h"
+
+namespace vkray {
+
+struct RenderProgress {
+  double fraction = 0.0; // of all pixel work, 0..1
+  double elapsedMs = 0.0;
+  double raysPerSecond = 0.0; // when statistics are counted, else 0
+  double remainingMs = 0.0;
+};
+
+// Where the kernel reads small scene arrays from. Auto: uniform buffers on CPU devices when the
+// scene fits their capacity (a UBO read is one vector gather on lavapipe, an SSBO read a per-lane
+// loop), storage buffers otherwise.
+enum class SceneMemory { Auto, Uniform, Storage };
+template <> struct EnumNames<SceneMemory> {
+  static constexpr std::array<EnumName<SceneMemory>, 3> values{
+      {{SceneMemory::Auto, "auto"}, {SceneMemory::Uniform, "uniform"}, {SceneMemory::Storage, "storage"}}};
+};
+
+// Which kernel render() runs: the renderer's, or the ray queries alone (shaders/hits.comp: closest
+// hit of each pixel-centre eye ray and, with shadows, one any-hit shadow ray; no shading), which
+// `vkray bench meshes` sets against Embree.
+enum class Kernel { Shade, Hits };
+
+struct RenderOptions {
+  Kernel kernel = Kernel::Shade;
+  bool specialize = true; // false: every feature compiled in (--no-specialize)
+  SceneMemory sceneMemory = SceneMemory::Auto;
+  bool progressive = false;    // samples from the per-pixel sequence even at 1 spp (viewer frames)
+  bool countStats = true;      // ray counters (a specialization; off costs nothing)
+  double bandBudgetMs = 100.0; // target GPU time of one submission (watchdog-safe)
+  // Rows of workgroups whose every eye ray provably meets nothing are filled with the background
+  // instead of traced (render/row_culling.h; the image is the same). Off: --no-row-culling.
+  bool cullRows = true;
+  // Eye rays start their BVH walk at their 8 x 8 tile's entry points, found once per tile by
+  // shaders/entry.comp (the same hits; docs/performance.md, "Entry points"). Off: --no-entry-points.
+  bool entryPoints = true;
+  std::function<void(const RenderProgress&)> progress;
+  const std::atomic<bool>* cancel = nullptr; // checked between bands
+};
+
+struct RenderTimings {
+  double pipelineMs = 0.0;  // pipeline creation (0 when reused within the process)
+  double traceMs = 0.0;     // GPU time of the trace dispatches (timestamp queries)
+  double traceWallMs = 0.0; // host wall time of the trace submissions
+  double readbackMs = 0.0;
+  int bands = 0;
+  std::uint32_t culledRows = 0; // rows of the sample pass filled with the background (row culling)
+  bool pipelineReused = false;
+};
+
+struct RenderResult {
+  Image image; // Kernel::Shade
+  // Kernel::Hits: per pixel, row-major, vec4(t or -1, hit kind, primitive index, shadow: -1 none
+  // traced, 0 lit, 1 occluded).
+  std::vector<glm::vec4> hits;
+  RayStats stats;
+  RenderTimings timings;
+  Features features;
+};
+
+} // namespace vkray

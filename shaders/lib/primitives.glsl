@@ -1,0 +1,81 @@
+// One intersection test per primitive kind over the scene's records (the cheap step: t, and
+// barycentrics for triangles), and the surface record of the closest hit (the second step, once per
+// ray; pbrt-v4's split).
+#ifndef VKRAY_PRIMITIVES_GLSL
+#define VKRAY_PRIMITIVES_GLSL
+
+#include "precision.glsl"
+
+float sphereT(TraceRay r, uint i, float tMax) {
+  Sphere s = loadSphere(i);
+  return sphereDistance(r, sphereCenter(s), sphereRadius(s), tMax);
+}
+
+float triangleT(TraceRay r, uint i, float tMax, out vec3 bary) {
+  Triangle tri = loadTriangle(i);
+  return triangleDistance(r, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, tMax, bary);
+}
+
+float polygonT(TraceRay r, uint i, float tMax) {
+  Polygon poly = loadPolygon(i);
+  return polygonDistance(r, polygonNormal(poly), polygonFirstVertex(poly), polygonVertexCount(poly), tMax);
+}
+
+float planeT(TraceRay r, uint i, float tMax) {
+  Plane pl = loadPlane(i);
+  return planeDistance(r, planeNormal(pl), planeOffset(pl), tMax);
+}
+
+// Tests one BVH leaf reference (or brute-force primitive) and keeps the closest hit.
+void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
+  if (HAS_SPHERES && kind == kPrimSphere) {
+    float t = sphereT(r, index, hit.t);
+    if (t > 0.0) hit = Hit(t, kPrimSphere, index, vec3(0.0));
+  } else if (HAS_TRIANGLES && kind == kPrimTriangle) {
+    vec3 bary;
+    float t = triangleT(r, index, hit.t, bary);
+    if (t > 0.0) hit = Hit(t, kPrimTriangle, index, bary);
+  } else if (HAS_POLYGONS && kind == kPrimPolygon) {
+    float t = polygonT(r, index, hit.t);
+    if (t > 0.0) hit = Hit(t, kPrimPolygon, index, vec3(0.0));
+  }
+}
+
+// Builds the surface record of the closest hit (called once per ray, not per candidate).
+Surface surfaceAt(TraceRay r, Hit hit) {
+  Surface s;
+  s.kind = hit.kind;
+  if (hit.kind == kPrimSphere) {
+    Sphere sph = loadSphere(hit.index);
+    sphereHitPoint(r.ray, hit.t, sphereCenter(sph), sphereRadius(sph), s.p, s.ng, s.errorBound);
+    s.ns = s.ng;
+    s.material = sphereMaterial(sph);
+  } else if (hit.kind == kPrimTriangle) {
+    Triangle tri = loadTriangle(hit.index);
+    triangleHitPoint(r.ray, hit.t, hit.bary, tri.v0.xyz, tri.v1.xyz, tri.v2.xyz, s.p, s.ng, s.errorBound);
+    s.ns = s.ng;
+    uint normalBase = triangleNormalBase(tri);
+    if (SMOOTH_NORMALS && normalBase != kNoNormals) {
+      vec3 n = hit.bary.x * loadShadingNormal(normalBase) + hit.bary.y * loadShadingNormal(normalBase + 1u) +
+               hit.bary.z * loadShadingNormal(normalBase + 2u);
+      float len = length(n);
+      if (len > 0.0) s.ns = n / len; // zero-length interpolated normal: keep the geometric one
+    }
+    s.material = triangleMaterial(tri);
+  } else if (hit.kind == kPrimPolygon) {
+    Polygon poly = loadPolygon(hit.index);
+    polygonSurface(r.ray, hit.t, loadPolyVertex(polygonFirstVertex(poly)), s.p, s.errorBound);
+    s.ng = polygonNormal(poly);
+    s.ns = s.ng;
+    s.material = polygonMaterial(poly);
+  } else {
+    Plane pl = loadPlane(hit.index);
+    planeSurface(r.ray, hit.t, planeNormal(pl), planeOffset(pl), s.p, s.errorBound);
+    s.ng = planeNormal(pl);
+    s.ns = s.ng;
+    s.material = planeMaterial(pl);
+  }
+  return s;
+}
+
+#endif
