@@ -465,7 +465,11 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
   const std::uint32_t windowRows = imageRows_;
 
   // Work units: base pass plus, for adaptive AA, the refine pass (weighted like a base pass).
-  const double totalWork = static_cast<double>(height) * (adaptive ? 2.0 : 1.0);
+  // A row window (a tile): adaptive AA's base pass also traces the row on each side that the refine
+  // pass reads as neighbours, so the window's pixels are those of the whole image.
+  const std::uint32_t rowEnd = options.rowEnd == 0 ? height : std::min(options.rowEnd, height);
+  const std::uint32_t rowBegin = std::min(options.rowBegin, rowEnd);
+  const double totalWork = static_cast<double>(rowEnd - rowBegin) * (adaptive ? 2.0 : 1.0);
   double doneWork = 0.0;
   auto traceStart = Clock::now();
   double rowsPerMs = 0.0; // measured speed, drives the band height
@@ -475,17 +479,18 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
   // band, and the image does not depend on where the bands split.
   Image baseImage;
   auto runPass = [&](bool refine) {
-    std::uint32_t y = 0;
+    const std::uint32_t end = adaptive && !refine ? std::min(height, rowEnd + 1) : rowEnd;
+    std::uint32_t y = adaptive && !refine && rowBegin > 0 ? rowBegin - 1 : rowBegin;
     std::uint32_t rows =
         std::min<std::uint32_t>(height, std::max<std::uint32_t>(8, (65536 / std::max(1u, width) + 7) / 8 * 8));
-    while (y < height) {
+    while (y < end) {
       if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
       if (rowsPerMs > 0.0) {
         double want = rowsPerMs * options.bandBudgetMs;
         rows = static_cast<std::uint32_t>(std::clamp(want, 8.0, static_cast<double>(windowRows)));
         rows = std::max<std::uint32_t>(8, rows / 8 * 8);
       }
-      rows = std::min({rows, windowRows, height - y});
+      rows = std::min({rows, windowRows, end - y});
 
       gpu::PushConstants push{};
       push.tileOrigin = glm::uvec2(0, y);
@@ -573,7 +578,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
       doneWork += rows;
       if (options.progress) {
         RenderProgress p;
-        p.fraction = doneWork / totalWork;
+        p.fraction = std::min(1.0, doneWork / totalWork);
         p.elapsedMs = msSince(traceStart);
         p.raysPerSecond = p.elapsedMs > 0 ? static_cast<double>(result.stats.total()) / (p.elapsedMs * 1e-3) : 0.0;
         p.remainingMs = p.fraction > 0 ? p.elapsedMs * (1.0 - p.fraction) / p.fraction : 0.0;
