@@ -76,9 +76,17 @@ void writeTile(const fs::path& path, const Image& whole, const TileInfo& info) {
                       {"height", info.height}, {"row_begin", info.rowBegin},      {"row_end", info.rowEnd},
                       {"frame", info.frame},   {"fingerprint", info.fingerprint}, {"scene", info.scene}};
   std::string text = j.dump(2) + "\n";
-  // The description first: a tile whose pixels exist always has one.
-  writeFileAtomic(tileSidecarPath(path), std::vector<std::uint8_t>(text.begin(), text.end()));
-  writeFileAtomic(path, encodePfm(band));
+  // The description first, so a tile whose pixels exist always has one; if the pixels then cannot
+  // be written, the description goes too (no partial output).
+  const fs::path side = tileSidecarPath(path);
+  writeFileAtomic(side, std::vector<std::uint8_t>(text.begin(), text.end()));
+  try {
+    writeFileAtomic(path, encodePfm(band));
+  } catch (...) {
+    std::error_code ec;
+    fs::remove(side, ec);
+    throw;
+  }
 }
 
 Image mergeTiles(const std::vector<fs::path>& paths) {
