@@ -2,6 +2,7 @@
 // output file (or an untouched old one) whenever a render fails.
 #include <sys/wait.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -171,6 +172,110 @@ TEST_F(Cli, UnknownDeviceIsOneLine) {
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
 }
 
+// Adaptive antialiasing refines from neighbour rows: a tile traces the row beyond each edge in its
+// base pass, so its pixels are still the whole image's. Tiles and frame ranges combine.
+TEST_F(Cli, AdaptiveTilesOfAFrameRangeMergeExactly) {
+  std::string scene = this->scene("showcase-turntable.json");
+  std::string flags = " --width 40 --height 30 --spp 4 --aa adaptive -q";
+  auto r = vkray("render " + scene + " --frames 6-7" + flags + " -o '" + (dir_ / "w_%d.pfm").string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  for (int i = 1; i <= 3; ++i) {
+    r = vkray("render " + scene + " --frames 6-7 --tile " + std::to_string(i) + "/3" + flags + " -o '" +
+              (dir_ / ("t_%d_" + std::to_string(i) + ".pfm")).string() + "'");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+  }
+  for (int f : {6, 7}) {
+    std::string tiles;
+    for (int i = 3; i >= 1; --i)
+      tiles += " " + (dir_ / ("t_" + std::to_string(f) + "_" + std::to_string(i) + ".pfm")).string();
+    fs::path merged = dir_ / ("m_" + std::to_string(f) + ".pfm");
+    r = vkray("merge -o " + merged.string() + tiles);
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_TRUE(slurp(merged) == slurp(dir_ / ("w_" + std::to_string(f) + ".pfm"))) << "frame " << f;
+  }
+}
+
+// Frames and tiles: a frame of the animated scene is the static scene with its values written in,
+// a range writes one file per frame, tiles merge into the whole image byte for byte, and bad
+// frame, tile and pattern flags fail with one line and write nothing.
+TEST_F(Cli, FrameOfAnAnimationEqualsTheStaticSceneWithItsValues) {
+  std::string animated = R"({ "camera": { "position": [0, 1.5, 5], "look_at": [0, 0.5, 0], "fov_y": 40 },
+    "lights": [ { "name": "key", "position": [2, 5, 3] } ],
+    "objects": [ { "type": "plane", "normal": [0, 1, 0], "offset": 0 },
+                 { "type": "sphere", "name": "ball", "center": [0, 0.5, 0], "radius": 0.5 } ],
+    "animation": { "frames": 5,
+      "camera": [ { "frame": 0, "fov_y": 40 }, { "frame": 4, "fov_y": 30 } ],
+      "objects": { "ball": [ { "frame": 0, "translate": [0, 0, 0] }, { "frame": 4, "translate": [1, 0, 0] } ] },
+      "lights": { "key": [ { "frame": 0, "position": [2, 5, 3] }, { "frame": 4, "position": [-2, 5, 3] } ] } } })";
+  std::string written = R"({ "camera": { "position": [0, 1.5, 5], "look_at": [0, 0.5, 0], "fov_y": 35 },
+    "lights": [ { "position": [0, 5, 3] } ],
+    "objects": [ { "type": "plane", "normal": [0, 1, 0], "offset": 0 },
+                 { "type": "sphere", "center": [0.5, 0.5, 0], "radius": 0.5 } ] })";
+  fs::path a = write("anim.json", animated);
+  fs::path b = write("static.json", written);
+  auto r = vkray("render " + a.string() + " --frame 2 --width 48 --height 32 -q -o " + (dir_ / "f2.png").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  r = vkray("render " + b.string() + " --width 48 --height 32 -q -o " + (dir_ / "s.png").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(slurp(dir_ / "f2.png") == slurp(dir_ / "s.png"));
+  r = vkray("render " + a.string() + " --frame 0 --width 48 --height 32 -q -o " + (dir_ / "f0.png").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(slurp(dir_ / "f0.png") != slurp(dir_ / "s.png"));
+}
+
+TEST_F(Cli, FrameRangeWritesOneFilePerFrameAndTilesMergeExactly) {
+  std::string scene = this->scene("showcase-turntable.json");
+  std::string size = " --width 40 --height 30 -q";
+  auto r = vkray("render " + scene + " --frames 3-5" + size + " -o '" + (dir_ / "f_%04d.png").string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  for (const char* f : {"f_0003.png", "f_0004.png", "f_0005.png"}) EXPECT_TRUE(fs::exists(dir_ / f)) << f;
+  EXPECT_FALSE(fs::exists(dir_ / "f_0002.png"));
+  EXPECT_TRUE(slurp(dir_ / "f_0003.png") != slurp(dir_ / "f_0005.png"));
+  std::string tiles;
+  for (int i = 1; i <= 4; ++i) {
+    fs::path t = dir_ / ("t" + std::to_string(i) + ".pfm");
+    r = vkray("render " + scene + " --frame 4 --tile " + std::to_string(i) + "/4" + size + " -o " + t.string());
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    tiles += " " + t.string();
+  }
+  r = vkray("merge -o " + (dir_ / "m.png").string() + tiles);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_TRUE(slurp(dir_ / "m.png") == slurp(dir_ / "f_0004.png"));
+  // Tiles of another frame do not merge with these.
+  r = vkray("render " + scene + " --frame 5 --tile 2/4" + size + " -o " + (dir_ / "other.pfm").string());
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  r = vkray("merge -o " + (dir_ / "bad.png").string() + " " + (dir_ / "t1.pfm").string() + " " +
+            (dir_ / "other.pfm").string() + " " + (dir_ / "t3.pfm").string() + " " + (dir_ / "t4.pfm").string());
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("other.pfm: is of frame 5"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad.png"));
+}
+
+TEST_F(Cli, BadFramesAndTilesFailWithOneLineAndWriteNothing) {
+  std::string scene = this->scene("showcase-turntable.json");
+  struct Case {
+    std::string args;
+    std::string expect;
+  };
+  const std::vector<Case> cases = {
+      {"--tile 0/3 -o x.pfm", "--tile 0/3: the band must be 1 to 3, got 0"},
+      {"--tile 4/3 -o x.pfm", "--tile 4/3: the band must be 1 to 3, got 4"},
+      {"--tile 1/3 -o x.png", "a tile is written as .pfm"},
+      {"--frames 5-2 -o 'x_%d.png'", "--frames 5-2: the range runs backwards"},
+      {"--frames 40-48 -o 'x_%d.png'", "--frames 40-48: the animation has frames 0-47"},
+      {"--frame 48 -o x.png", "--frame 48: the animation has frames 0-47"},
+      {"--frames 1-3 -o x.png", "name them with a frame number pattern such as out_%04d.png"},
+  };
+  for (const Case& c : cases) {
+    auto r = vkray("render " + scene + " --width 16 --height 16 -q " + c.args.substr(0, c.args.find(" -o ")) + " -o " +
+                   (dir_ / "").string() + c.args.substr(c.args.find(" -o ") + 4));
+    EXPECT_EQ(r.exitCode, 1) << c.args;
+    EXPECT_NE(r.err.find(c.expect), std::string::npos) << c.args << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+  EXPECT_TRUE(fs::is_empty(dir_)) << "a failed run wrote a file";
+}
+
 } // namespace
 } // namespace vkray::test
 
@@ -218,6 +323,5 @@ TEST_F(Cli, AccuracyBenchQuickWritesACsvAndPlots) {
   EXPECT_NE(report.find("| numerics | naive |"), std::string::npos);
   EXPECT_NE(report.find("Pareto front"), std::string::npos);
 }
-
 } // namespace
 } // namespace vkray::test

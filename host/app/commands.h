@@ -3,6 +3,7 @@
 #pragma once
 
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -20,9 +21,18 @@ struct RenderArgs {
   bool quiet = false;
   KernelFlags kernel;
   double bandMs = 100.0;
+  std::optional<int> frame; // --frame N
+  std::string frames;       // --frames A-B
+  std::string tile;         // --tile I/N
+};
+
+struct MergeArgs {
+  std::filesystem::path output;
+  std::vector<std::filesystem::path> tiles;
 };
 
 int runRender(const RenderArgs& args);
+int runMerge(const MergeArgs& args);
 int runInfo(const DeviceFlags& device);
 
 } // namespace vkray

@@ -1,4 +1,4 @@
-// vkray: a Whitted ray tracer in a Vulkan compute shader. The command line: render | view | bench | info.
+// vkray: a Whitted ray tracer in a Vulkan compute shader. The command line: render | merge | view | bench | info.
 #include <cstdio>
 #include <exception>
 
@@ -25,9 +25,21 @@ int main(int argc, char** argv) {
   renderCmd->add_flag("-q,--quiet", render.quiet, "no progress bar");
   renderCmd->add_option("--band-ms", render.bandMs, "target GPU time per submission in ms (watchdog safety)")
       ->check(realRange(1.0, 10000.0));
+  auto* frameOpt = renderCmd->add_option("--frame", render.frame, "render frame N of the scene's animation");
+  renderCmd
+      ->add_option("--frames", render.frames,
+                   "render frames A-B in one process; -o then needs a frame number pattern (out_%04d.png)")
+      ->excludes(frameOpt);
+  renderCmd->add_option("--tile", render.tile,
+                        "render only band I of N horizontal bands (I from 1), to a .pfm tile for 'vkray merge'");
   addRenderFlags(*renderCmd, render.render);
   addKernelFlags(*renderCmd, render.kernel);
   addDeviceFlags(*renderCmd, render.device);
+
+  MergeArgs merge;
+  auto* mergeCmd = app.add_subcommand("merge", "join tiles from 'render --tile' into the whole image");
+  mergeCmd->add_option("-o,--output", merge.output, "output image: .png or .pfm")->required();
+  mergeCmd->add_option("tiles", merge.tiles, "tile files (.pfm, each with its .tile.json)")->required();
 
   auto* benchCmd = app.add_subcommand("bench", "benchmarks that print figures and ratios");
   benchCmd->require_subcommand(1);
@@ -93,6 +105,7 @@ int main(int argc, char** argv) {
 
   try {
     if (*renderCmd) return runRender(render);
+    if (*mergeCmd) return runMerge(merge);
     if (*infoCmd) return runInfo(infoFlags);
     if (*viewCmd) return runView(view);
     if (*benchTimeCmd) return runBenchTime(benchTime);

@@ -1,12 +1,16 @@
 // `vkray render`: load, analyse, build, render, write — in that order, as the design draws it.
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 
 #include "app/commands.h"
 #include "app/terminal.h"
 #include "image/image_io.h"
+#include "image/tile_io.h"
 #include "render/renderer.h"
+#include "scene/animation.h"
 #include "scene/features.h"
+#include "scene/scene_fingerprint.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
 #include "vk/context.h"
@@ -53,17 +57,115 @@ vulkan::Context openContext(const vulkan::ContextOptions& options) {
   }
 }
 
-// Host-side times of one render, beside the renderer's own.
-struct RenderTimesMs {
-  double load = 0.0;
-  double write = 0.0;
-  double total = 0.0;
+// The frames a render covers: --frame N, --frames A-B, or frame 0.
+struct FrameRange {
+  int first = 0;
+  int last = 0;
+  bool given = false; // -o is then a pattern
 };
 
-// `render --stats`: the run as `name: value` lines, which scripts read.
-void printRenderStats(const RenderArgs& args, const Scene& scene, const vulkan::Context& context,
-                      const Renderer& renderer, const vulkan::PipelineCache* cache, const RenderResult& result,
-                      const RenderTimesMs& times) {
+int parseFrameNumber(const std::string& text, const std::string& flag, const std::string& whole) {
+  if (text.empty() || text.size() > 9 || text.find_first_not_of("0123456789") != std::string::npos) {
+    throw InputError(flag, "expected A-B with whole frame numbers >= 0, got '" + whole + "'");
+  }
+  return std::atoi(text.c_str());
+}
+
+FrameRange frameRange(const RenderArgs& args, int frames) {
+  FrameRange r;
+  std::string flag;
+  if (args.frame) {
+    r.first = r.last = *args.frame;
+    r.given = true;
+    flag = "--frame " + std::to_string(*args.frame);
+    if (*args.frame < 0) throw InputError(flag, "frames are numbered from 0");
+  } else if (!args.frames.empty()) {
+    flag = "--frames " + args.frames;
+    auto dash = args.frames.find('-');
+    if (dash == std::string::npos) throw InputError("--frames", "expected A-B, got '" + args.frames + "'");
+    r.first = parseFrameNumber(args.frames.substr(0, dash), "--frames", args.frames);
+    r.last = parseFrameNumber(args.frames.substr(dash + 1), "--frames", args.frames);
+    r.given = true;
+    if (r.last < r.first)
+      throw InputError(flag,
+                       "the range runs backwards (" + std::to_string(r.last) + " < " + std::to_string(r.first) + ")");
+  }
+  if (r.last >= frames) {
+    throw InputError(flag, frames == 1 ? "the scene has no animation: its one frame is 0"
+                                       : "the animation has frames 0-" + std::to_string(frames - 1));
+  }
+  return r;
+}
+
+// The output file of one frame: the pattern's one printf-style %d / %0Nd conversion replaced by the
+// frame number ("%%" is a literal %).
+std::filesystem::path framePath(const std::string& pattern, int frame, bool& hasConversion) {
+  std::string out;
+  int conversions = 0;
+  for (std::size_t i = 0; i < pattern.size(); ++i) {
+    if (pattern[i] != '%') {
+      out += pattern[i];
+      continue;
+    }
+    if (i + 1 < pattern.size() && pattern[i + 1] == '%') {
+      out += '%';
+      ++i;
+      continue;
+    }
+    std::size_t j = i + 1;
+    bool zero = j < pattern.size() && pattern[j] == '0';
+    std::size_t digits = j;
+    while (digits < pattern.size() && std::isdigit(static_cast<unsigned char>(pattern[digits]))) ++digits;
+    if (digits >= pattern.size() || pattern[digits] != 'd' || digits - j > 2) {
+      throw InputError("-o " + pattern, "a frame number pattern is %d or %0Nd (as out_%04d.png), and %% a literal %");
+    }
+    int width = digits > j ? std::atoi(pattern.substr(j, digits - j).c_str()) : 0;
+    std::string number = std::to_string(frame);
+    if (static_cast<int>(number.size()) < width) number.insert(0, width - number.size(), zero ? '0' : ' ');
+    out += number;
+    ++conversions;
+    i = digits;
+  }
+  if (conversions > 1) throw InputError("-o " + pattern, "has more than one frame number pattern");
+  hasConversion = conversions == 1;
+  return out;
+}
+
+// Band I of N from "--tile I/N".
+struct TileRequest {
+  std::uint32_t index = 0;
+  std::uint32_t count = 0;
+};
+
+std::optional<TileRequest> tileRequest(const RenderArgs& args, const RenderSettings& settings) {
+  if (args.tile.empty()) return std::nullopt;
+  const std::string flag = "--tile " + args.tile;
+  auto slash = args.tile.find('/');
+  auto number = [&](const std::string& t) {
+    if (t.empty() || t.size() > 6 || t.find_first_not_of("0123456789") != std::string::npos) {
+      throw InputError(flag, "expected I/N with whole numbers, band I of N (I from 1)");
+    }
+    return static_cast<std::uint32_t>(std::atoi(t.c_str()));
+  };
+  if (slash == std::string::npos) throw InputError(flag, "expected I/N, band I of N (I from 1)");
+  TileRequest t{number(args.tile.substr(0, slash)), number(args.tile.substr(slash + 1))};
+  if (t.count == 0) throw InputError(flag, "N must be at least 1");
+  if (t.index < 1 || t.index > t.count) {
+    throw InputError(flag, "the band must be 1 to " + std::to_string(t.count) + ", got " + std::to_string(t.index));
+  }
+  if (t.count > settings.height) {
+    throw InputError(flag, std::to_string(t.count) + " bands are more than the image's " +
+                               std::to_string(settings.height) + " rows");
+  }
+  if (imageFormatFor(args.output) != ImageFormat::Pfm) {
+    throw InputError("-o " + args.output.string(), "a tile is written as .pfm (linear float), for 'vkray merge'");
+  }
+  return t;
+}
+
+void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Context& context,
+                const vulkan::PipelineCache* cache, Renderer& renderer, const RenderResult& result, double loadMs,
+                double writeMs, Clock::time_point t0) {
   const auto& info = context.info();
   const auto& s = result.stats;
   std::printf("scene: %s\n", args.scene.string().c_str());
@@ -76,7 +178,7 @@ void printRenderStats(const RenderArgs& args, const Scene& scene, const vulkan::
                                     : renderer.usesUniformShading()
                                         ? "materials, lights, planes uniform; primitives in storage and texel buffers"
                                         : "storage and texel buffers");
-  printStat("load", times.load);
+  printStat("load", loadMs);
   for (const MeshInfo& m : scene.meshes) {
     std::printf("mesh %s: %zu triangles, %zu degenerate dropped\n", m.file.c_str(), m.triangleCount,
                 m.droppedDegenerate);
@@ -108,8 +210,8 @@ void printRenderStats(const RenderArgs& args, const Scene& scene, const vulkan::
   // Rows whose eye rays provably miss everything, filled with the background instead of traced.
   std::printf("culled rows: %u of %u\n", result.timings.culledRows, scene.render.height);
   printStat("readback", result.timings.readbackMs);
-  printStat("write", times.write);
-  printStat("total", times.total);
+  printStat("write", writeMs);
+  printStat("total", msSince(t0));
   for (const auto& [name, value] : s.named()) {
     std::printf("%.*s: %llu\n", static_cast<int>(name.size()), name.data(), static_cast<unsigned long long>(value));
   }
@@ -127,8 +229,20 @@ int runRender(const RenderArgs& args) {
   Scene scene = loadScene(args.scene);
   applyRenderFlags(args.render, scene.render);
   double loadMs = msSince(t0);
-  // Fail on an unwritable output before spending any time on the GPU.
-  checkOutputPath(args.output);
+  const FrameRange frames = frameRange(args, frameCount(scene));
+  const std::optional<TileRequest> tile = tileRequest(args, scene.render);
+  // Every output checked, and a range given a pattern, before any time on the GPU.
+  std::vector<std::filesystem::path> outputs;
+  for (int f = frames.first; f <= frames.last; ++f) {
+    bool pattern = false;
+    outputs.push_back(frames.given ? framePath(args.output.string(), f, pattern) : args.output);
+    if (frames.last > frames.first && !pattern) {
+      throw InputError("-o " + args.output.string(),
+                       "renders frames " + std::to_string(frames.first) + "-" + std::to_string(frames.last) +
+                           ": name them with a frame number pattern such as out_%04d.png");
+    }
+    checkOutputPath(outputs.back());
+  }
 
   Features features = analyzeScene(scene, scene.render);
   if (args.explain) {
@@ -144,44 +258,69 @@ int runRender(const RenderArgs& args) {
     cache = std::make_unique<vulkan::PipelineCache>(context, vulkan::PipelineCache::defaultFile(context));
   }
 
+  // One renderer for every frame: pipelines are built once and reused while the features agree.
   Renderer renderer(context, cache.get());
-  renderer.setScene(scene, features);
-
   const auto& interrupted = installInterruptFlag();
-  ProgressBar bar(!args.quiet);
   RenderOptions options;
   applyKernelFlags(args.kernel, options);
   options.countStats = args.stats;
   options.bandBudgetMs = args.bandMs;
   options.cancel = &interrupted;
-  options.progress = [&](const RenderProgress& p) { bar.update(p); };
-  RenderResult result = renderer.render(scene.camera, scene.render, options);
-  bar.finish();
-
-  if (context.validationEnabled() && context.validationMessageCount() > 0) {
-    throw DeviceError("the validation layer reported " + std::to_string(context.validationMessageCount()) +
-                      " message(s); no output written");
-  }
-  if (result.stats.nonFinite > 0) {
-    std::fprintf(stderr, "vkray: warning: %llu samples were NaN/Inf and were replaced by black\n",
-                 static_cast<unsigned long long>(result.stats.nonFinite));
+  TileInfo tileInfo;
+  if (tile) {
+    tileRows(scene.render.height, tile->index, tile->count, tileInfo.rowBegin, tileInfo.rowEnd);
+    options.rowBegin = tileInfo.rowBegin;
+    options.rowEnd = tileInfo.rowEnd;
+    tileInfo.width = scene.render.width;
+    tileInfo.height = scene.render.height;
+    tileInfo.scene = args.scene.string();
   }
 
-  if (result.stats.truncated > 0) {
-    std::fprintf(stderr,
-                 "vkray: warning: %llu samples were cut short by the driver's loop limit (llvmpipe stops a "
-                 "shader after 65535 loop iterations): raise render.bailout or lower max_depth\n",
-                 static_cast<unsigned long long>(result.stats.truncated));
-  }
+  for (int f = frames.first; f <= frames.last; ++f) {
+    const Scene frameScene = scene.animation ? sceneAtFrame(scene, *scene.animation, f) : scene;
+    // A static scene's features are the ones analysed above; an animated frame's are its own.
+    renderer.setScene(frameScene, scene.animation ? analyzeScene(frameScene, frameScene.render) : features);
+    ProgressBar bar(!args.quiet);
+    options.progress = [&](const RenderProgress& p) { bar.update(p); };
+    RenderResult result = renderer.render(frameScene.camera, frameScene.render, options);
+    bar.finish();
 
-  auto tw = Clock::now();
-  writeImage(args.output, result.image);
-  double writeMs = msSince(tw);
+    if (context.validationEnabled() && context.validationMessageCount() > 0) {
+      throw DeviceError("the validation layer reported " + std::to_string(context.validationMessageCount()) +
+                        " message(s); no output written");
+    }
+    if (result.stats.nonFinite > 0) {
+      std::fprintf(stderr, "vkray: warning: %llu samples were NaN/Inf and were replaced by black\n",
+                   static_cast<unsigned long long>(result.stats.nonFinite));
+    }
+    if (result.stats.truncated > 0) {
+      std::fprintf(stderr,
+                   "vkray: warning: %llu samples were cut short by the driver's loop limit (llvmpipe stops a "
+                   "shader after 65535 loop iterations): raise render.bailout or lower max_depth\n",
+                   static_cast<unsigned long long>(result.stats.truncated));
+    }
 
-  if (args.stats) {
-    RenderTimesMs times{loadMs, writeMs, msSince(t0)};
-    printRenderStats(args, scene, context, renderer, cache.get(), result, times);
+    auto tw = Clock::now();
+    const std::filesystem::path& output = outputs[static_cast<std::size_t>(f - frames.first)];
+    if (tile) {
+      tileInfo.frame = f;
+      tileInfo.fingerprint = sceneFingerprint(frameScene, f);
+      writeTile(output, result.image, tileInfo);
+    } else {
+      writeImage(output, result.image);
+    }
+    double writeMs = msSince(tw);
+    if (args.stats) {
+      if (frames.given) std::printf("frame: %d\n", f);
+      printStats(args, frameScene, context, cache.get(), renderer, result, loadMs, writeMs, t0);
+    }
   }
+  return 0;
+}
+
+int runMerge(const MergeArgs& args) {
+  checkOutputPath(args.output);
+  writeImage(args.output, mergeTiles(args.tiles));
   return 0;
 }
 

@@ -9,18 +9,18 @@
 namespace vkray {
 
 BandSizer::BandSizer(std::uint32_t width, std::uint32_t height, std::uint32_t windowRows, double budgetMs)
-    : height_(height), windowRows_(windowRows), budgetMs_(budgetMs) {
+    : windowRows_(windowRows), budgetMs_(budgetMs) {
   firstRows_ = std::min<std::uint32_t>(height, std::max<std::uint32_t>(8, (65536 / std::max(1u, width) + 7) / 8 * 8));
 }
 
-std::uint32_t BandSizer::rowsAt(std::uint32_t y) const {
+std::uint32_t BandSizer::rowsAt(std::uint32_t y, std::uint32_t end) const {
   std::uint32_t rows = firstRows_;
   if (rowsPerMs_ > 0.0) {
     double want = rowsPerMs_ * budgetMs_;
     rows = static_cast<std::uint32_t>(std::clamp(want, 8.0, static_cast<double>(windowRows_)));
     rows = std::max<std::uint32_t>(8, rows / 8 * 8);
   }
-  return std::min({rows, windowRows_, height_ - y});
+  return std::min({rows, windowRows_, end - y});
 }
 
 void BandSizer::measured(std::uint32_t rows, double gpuMs) {

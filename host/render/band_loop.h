@@ -25,11 +25,10 @@ namespace vkray {
 class BandSizer {
 public:
   BandSizer(std::uint32_t width, std::uint32_t height, std::uint32_t windowRows, double budgetMs);
-  std::uint32_t rowsAt(std::uint32_t y) const; // the band starting at row y
+  std::uint32_t rowsAt(std::uint32_t y, std::uint32_t end) const; // the band from row y, before row `end`
   void measured(std::uint32_t rows, double gpuMs);
 
 private:
-  std::uint32_t height_;
   std::uint32_t windowRows_;
   std::uint32_t firstRows_;
   double budgetMs_;

@@ -50,6 +50,10 @@ struct RenderOptions {
   // Eye rays start their BVH walk at their 8 x 8 tile's entry points, found once per tile by
   // shaders/entry.comp (the same hits; docs/performance.md, "Entry points"). Off: --no-entry-points.
   bool entryPoints = true;
+  // render() traces only rows [rowBegin, rowEnd) (rowEnd 0: to the last row); the other rows of the
+  // image are black. A tile of the image, the same pixels as rendering it whole.
+  std::uint32_t rowBegin = 0;
+  std::uint32_t rowEnd = 0;
   std::function<void(const RenderProgress&)> progress;
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };

@@ -55,7 +55,7 @@ public:
     doneRows_ += rows;
     if (!options_.progress) return;
     RenderProgress p;
-    p.fraction = doneRows_ / totalRows_;
+    p.fraction = totalRows_ > 0 ? std::min(1.0, doneRows_ / totalRows_) : 1.0;
     p.elapsedMs = msSince(start_);
     p.raysPerSecond = p.elapsedMs > 0 ? static_cast<double>(raysSoFar) / (p.elapsedMs * 1e-3) : 0.0;
     p.remainingMs = p.fraction > 0 ? p.elapsedMs * (1.0 - p.fraction) / p.fraction : 0.0;
@@ -130,27 +130,34 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
     result.image = Image(settings.width, settings.height);
   const bool adaptive = !hitsKernel && settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
 
-  ProgressMeter meter(options, static_cast<double>(settings.height) * (adaptive ? 2.0 : 1.0));
+  // A row window (a tile): adaptive AA's base pass also traces the row on each side that the refine
+  // pass reads as neighbours, so the window's pixels are those of the whole image.
+  const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
+  const std::uint32_t rowBegin = std::min(options.rowBegin, rowEnd);
+  const std::uint32_t baseBegin = adaptive && rowBegin > 0 ? rowBegin - 1 : rowBegin;
+  const std::uint32_t baseEnd = adaptive ? std::min(settings.height, rowEnd + 1) : rowEnd;
+
+  ProgressMeter meter(options, static_cast<double>(rowEnd - rowBegin) * (adaptive ? 2.0 : 1.0));
   auto advanced = [&](std::uint32_t rows) { meter.advance(rows, result.stats.total()); };
   BandSizer sizer(settings.width, settings.height, imageRows_, options.bandBudgetMs);
-  traceBands(false, settings, options, nullptr, sizer, result, advanced);
+  traceBands(false, baseBegin, baseEnd, settings, options, nullptr, sizer, result, advanced);
   if (adaptive) {
     // The refine pass reads a copy of the base image: rows refined by the band above do not change
     // the decisions of the next band, and the image does not depend on where the bands split.
     Image base = result.image;
-    traceBands(true, settings, options, &base, sizer, result, advanced);
+    traceBands(true, rowBegin, rowEnd, settings, options, &base, sizer, result, advanced);
   }
   return result;
 }
 
-void Renderer::traceBands(bool refine, const RenderSettings& settings, const RenderOptions& options, const Image* base,
-                          BandSizer& sizer, RenderResult& result, const std::function<void(std::uint32_t)>& advanced) {
+void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, const RenderSettings& settings,
+                          const RenderOptions& options, const Image* base, BandSizer& sizer, RenderResult& result,
+                          const std::function<void(std::uint32_t)>& advanced) {
   const std::uint32_t width = settings.width;
-  const std::uint32_t height = settings.height;
   const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
-  for (std::uint32_t y = 0; y < height;) {
+  for (std::uint32_t y = begin; y < end;) {
     if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
-    const std::uint32_t rows = sizer.rowsAt(y);
+    const std::uint32_t rows = sizer.rowsAt(y, end);
 
     gpu::PushConstants push{};
     push.tileOrigin = glm::uvec2(0, y);

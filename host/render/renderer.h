@@ -68,8 +68,10 @@ public:
 private:
   // One pass over the whole image in bands: the sample pass, or (refine) adaptive AA's refine pass
   // deciding from `base`. The sizer carries the measured speed from one pass to the next.
-  void traceBands(bool refine, const RenderSettings& settings, const RenderOptions& options, const Image* base,
-                  BandSizer& sizer, RenderResult& result, const std::function<void(std::uint32_t)>& advanced);
+  // Rows [begin, end) of the image.
+  void traceBands(bool refine, std::uint32_t begin, std::uint32_t end, const RenderSettings& settings,
+                  const RenderOptions& options, const Image* base, BandSizer& sizer, RenderResult& result,
+                  const std::function<void(std::uint32_t)>& advanced);
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();

@@ -5,6 +5,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -14,6 +15,8 @@
 #include "util/enum_names.h"
 
 namespace vkray {
+
+struct Animation; // scene/animation.h
 
 // Right-handed, as glTF: a camera at the origin looking down -z with up +y sees +x on the right.
 struct Camera {
@@ -130,6 +133,20 @@ struct MeshInfo {
   std::size_t droppedDegenerate = 0;
 };
 
+// An object the scene file gave a "name": its kind and which primitives of that kind it made.
+enum class ObjectKind { Sphere, Plane, Polygon, Triangle, Mesh };
+struct NamedObject {
+  std::string name;
+  ObjectKind kind = ObjectKind::Sphere;
+  std::size_t first = 0; // index into the kind's array (triangles for a mesh)
+  std::size_t count = 1; // a mesh's triangle count; 1 otherwise
+};
+
+struct NamedLight {
+  std::string name;
+  std::size_t index = 0; // into Scene::lights
+};
+
 struct Scene {
   std::filesystem::path path; // file it was loaded from (for messages and relative mesh paths)
   Camera camera;
@@ -143,6 +160,11 @@ struct Scene {
   std::vector<Polygon> polygons;
   std::vector<Triangle> triangles;
   std::vector<MeshInfo> meshes;
+  std::vector<NamedObject> namedObjects; // in file order
+  std::vector<NamedLight> namedLights;
+  // The scene file's "animation", if any; sceneAtFrame (scene/animation.h) turns it into the
+  // static scene of one frame. Shared: every frame's Scene is a copy of this one.
+  std::shared_ptr<const Animation> animation;
 
   std::size_t boundedPrimitiveCount() const { return spheres.size() + polygons.size() + triangles.size(); }
   std::size_t objectCount() const { return boundedPrimitiveCount() + planes.size(); }

@@ -7,6 +7,7 @@
 #include <map>
 #include <sstream>
 
+#include "scene/animation.h"
 #include "scene/json_reader.h"
 #include "scene/mesh_import.h"
 #include "scene/scene_limits.h"
@@ -146,12 +147,20 @@ std::uint32_t readObjectMaterial(const JsonNode& object, LoadContext& ctx) {
 void readLights(const JsonNode& node, Scene& scene) {
   for (std::size_t i = 0; i < node.size(); ++i) {
     JsonNode l = node[i];
-    l.allowKeys({"type", "position", "color", "shadows"});
+    l.allowKeys({"type", "name", "position", "color", "shadows"});
     if (auto t = l.find("type")) t->choice({"point"});
     PointLight light;
     light.position = l.at("position").vec3();
     if (auto c = l.find("color")) light.color = c->color();
     if (auto s = l.find("shadows")) light.shadows = s->boolean();
+    if (auto n = l.find("name")) {
+      std::string name = n->string();
+      if (name.empty()) n->fail("must not be empty");
+      for (const NamedLight& other : scene.namedLights) {
+        if (other.name == name) n->fail("'" + name + "' names lights[" + std::to_string(other.index) + "] already");
+      }
+      scene.namedLights.push_back({name, scene.lights.size()});
+    }
     scene.lights.push_back(light);
   }
 }
@@ -170,7 +179,7 @@ dvec3 newellNormal(const std::vector<dvec3>& v) {
 }
 
 void readPolygon(const JsonNode& obj, LoadContext& ctx) {
-  obj.allowKeys({"type", "vertices", "material"});
+  obj.allowKeys({"type", "name", "vertices", "material"});
   JsonNode verts = obj.at("vertices");
   verts.expectArray();
   if (verts.size() < 3) verts.fail("a polygon needs at least 3 vertices, got " + std::to_string(verts.size()));
@@ -221,7 +230,7 @@ void readPolygon(const JsonNode& obj, LoadContext& ctx) {
 }
 
 void readTriangle(const JsonNode& obj, LoadContext& ctx) {
-  obj.allowKeys({"type", "vertices", "normals", "material"});
+  obj.allowKeys({"type", "name", "vertices", "normals", "material"});
   JsonNode verts = obj.at("vertices");
   verts.expectArray();
   if (verts.size() != 3) verts.fail("a triangle needs exactly 3 vertices, got " + std::to_string(verts.size()));
@@ -277,7 +286,8 @@ glm::dmat4 readTransform(const JsonNode& node) {
 }
 
 void readMesh(const JsonNode& obj, LoadContext& ctx) {
-  obj.allowKeys({"type", "file", "transform", "material", "normals", "import_camera", "import_lights", "light_scale"});
+  obj.allowKeys(
+      {"type", "name", "file", "transform", "material", "normals", "import_camera", "import_lights", "light_scale"});
   JsonNode fileNode = obj.at("file");
   std::string file = fileNode.string();
   if (file.empty()) fileNode.fail("must name a mesh file");
@@ -320,19 +330,30 @@ void readMesh(const JsonNode& obj, LoadContext& ctx) {
 }
 
 void readObjects(const JsonNode& node, LoadContext& ctx) {
+  std::map<std::string, std::string> names; // object name -> JSON path of the object that took it
   for (std::size_t i = 0; i < node.size(); ++i) {
     JsonNode obj = node[i];
     obj.expectObject();
     std::string type = obj.at("type").choice({"sphere", "plane", "polygon", "triangle", "mesh"});
+    // A "name" lets the animation refer to the object: remember which primitives it made.
+    std::optional<std::string> name;
+    if (auto n = obj.find("name")) {
+      name = n->string();
+      if (name->empty()) n->fail("must not be empty");
+      if (auto it = names.find(*name); it != names.end()) n->fail("'" + *name + "' names " + it->second + " already");
+      names[*name] = obj.path();
+    }
+    const Scene& s = ctx.scene;
+    const std::size_t before[] = {s.spheres.size(), s.planes.size(), s.polygons.size(), s.triangles.size()};
     if (type == "sphere") {
-      obj.allowKeys({"type", "center", "radius", "material"});
+      obj.allowKeys({"type", "name", "center", "radius", "material"});
       Sphere s;
       s.center = obj.at("center").vec3();
       s.radius = obj.at("radius").positive();
       s.material = readObjectMaterial(obj, ctx);
       ctx.scene.spheres.push_back(s);
     } else if (type == "plane") {
-      obj.allowKeys({"type", "normal", "offset", "point", "material"});
+      obj.allowKeys({"type", "name", "normal", "offset", "point", "material"});
       Plane p;
       dvec3 n = obj.at("normal").nonZeroVec3();
       double len = glm::length(n);
@@ -349,6 +370,16 @@ void readObjects(const JsonNode& node, LoadContext& ctx) {
     } else if (type == "mesh") {
       readMesh(obj, ctx);
     }
+    if (name) {
+      NamedObject named;
+      named.name = *name;
+      if (type == "sphere") named = {*name, ObjectKind::Sphere, before[0], 1};
+      if (type == "plane") named = {*name, ObjectKind::Plane, before[1], 1};
+      if (type == "polygon") named = {*name, ObjectKind::Polygon, before[2], 1};
+      if (type == "triangle") named = {*name, ObjectKind::Triangle, before[3], 1};
+      if (type == "mesh") named = {*name, ObjectKind::Mesh, before[3], s.triangles.size() - before[3]};
+      ctx.scene.namedObjects.push_back(named);
+    }
     if (ctx.scene.objectCount() > kMaxPrimitives) {
       obj.fail("too many primitives: more than " + std::to_string(kMaxPrimitives));
     }
@@ -360,8 +391,8 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
   LoadContext ctx{scene, {}, baseDir, std::nullopt, {}};
   JsonNode root(doc, "", name);
   root.expectObject();
-  root.allowKeys(
-      {"description", "base", "camera", "image", "background", "ambient", "render", "materials", "lights", "objects"});
+  root.allowKeys({"description", "base", "camera", "image", "background", "ambient", "render", "materials", "lights",
+                  "objects", "animation"});
   if (auto d = root.find("description")) d->string();
   // The camera may instead come from a glTF file (a mesh object with import_camera).
   auto cameraNode = root.find("camera");
@@ -391,6 +422,10 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
     root.at("materials")
         .fail("too many materials: " + std::to_string(scene.materials.size()) + " (at most " +
               std::to_string(kMaxMaterialCount) + ")");
+  }
+  if (auto a = root.find("animation")) {
+    scene.path = name; // for the animation's messages
+    scene.animation = std::make_shared<const Animation>(readAnimation(*a, scene));
   }
   return scene;
 }

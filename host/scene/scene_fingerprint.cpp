@@ -1,0 +1,115 @@
+// Canonical hash of a resolved Scene (see scene_fingerprint.h).
+#include "scene/scene_fingerprint.h"
+
+#include <cstdio>
+#include <cstring>
+
+namespace vkray {
+
+namespace {
+
+// FNV-1a (Fowler, Noll, Vo): a change of any input byte changes the hash; not a cryptographic hash,
+// which a check that tiles come from one render does not need.
+class Hasher {
+public:
+  void bytes(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t i = 0; i < n; ++i) {
+      h_ ^= p[i];
+      h_ *= 0x100000001b3ull;
+    }
+  }
+  void u64(std::uint64_t v) { bytes(&v, sizeof v); }
+  void f64(double v) {
+    if (v == 0.0) v = 0.0; // -0 and +0 render alike
+    std::uint64_t bits;
+    std::memcpy(&bits, &v, sizeof bits);
+    u64(bits);
+  }
+  void vec(const glm::dvec3& v) {
+    f64(v.x);
+    f64(v.y);
+    f64(v.z);
+  }
+  std::uint64_t value() const { return h_; }
+
+private:
+  std::uint64_t h_ = 0xcbf29ce484222325ull;
+};
+
+} // namespace
+
+std::string sceneFingerprint(const Scene& s, int frame) {
+  Hasher h;
+  h.u64(1); // encoding version
+  h.u64(static_cast<std::uint64_t>(frame));
+  const RenderSettings& r = s.render;
+  h.u64(r.width);
+  h.u64(r.height);
+  h.u64(static_cast<std::uint64_t>(r.maxDepth));
+  h.u64(static_cast<std::uint64_t>(r.spp));
+  h.f64(r.bailout);
+  h.u64(static_cast<std::uint64_t>(r.antialiasing));
+  h.f64(r.adaptiveThreshold);
+  h.u64(static_cast<std::uint64_t>(r.numerics));
+  h.u64(static_cast<std::uint64_t>(r.fresnel));
+  h.u64(static_cast<std::uint64_t>(r.transmissiveShadows));
+  h.u64(static_cast<std::uint64_t>(r.bvh));
+  h.u64(static_cast<std::uint64_t>(r.precision));
+  h.vec(s.camera.position);
+  h.vec(s.camera.lookAt);
+  h.vec(s.camera.up);
+  h.f64(s.camera.fovY);
+  h.vec(s.background);
+  h.vec(s.ambientLight);
+  h.u64(s.materials.size());
+  for (const Material& m : s.materials) {
+    h.vec(m.color);
+    for (double v : {m.ambient, m.diffuse, m.specular, m.shininess, m.reflection, m.transmission, m.ior}) h.f64(v);
+    h.vec(m.absorption);
+    h.u64(m.checker ? 1 : 0);
+    if (m.checker) {
+      h.vec(m.checker->color2);
+      h.f64(m.checker->scale);
+    }
+  }
+  h.u64(s.lights.size());
+  for (const PointLight& l : s.lights) {
+    h.vec(l.position);
+    h.vec(l.color);
+    h.u64(l.shadows ? 1 : 0);
+  }
+  h.u64(s.spheres.size());
+  for (const Sphere& sp : s.spheres) {
+    h.vec(sp.center);
+    h.f64(sp.radius);
+    h.u64(sp.material);
+  }
+  h.u64(s.planes.size());
+  for (const Plane& p : s.planes) {
+    h.vec(p.normal);
+    h.f64(p.offset);
+    h.u64(p.material);
+  }
+  h.u64(s.polygons.size());
+  for (const Polygon& p : s.polygons) {
+    h.u64(p.vertices.size());
+    for (const auto& v : p.vertices) h.vec(v);
+    h.vec(p.normal);
+    h.u64(p.material);
+  }
+  h.u64(s.triangles.size());
+  for (const Triangle& t : s.triangles) {
+    for (const auto& v : t.v) h.vec(v);
+    h.u64(t.normals ? 1 : 0);
+    if (t.normals) {
+      for (const auto& n : *t.normals) h.vec(n);
+    }
+    h.u64(t.material);
+  }
+  char text[17];
+  std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h.value()));
+  return text;
+}
+
+} // namespace vkray
