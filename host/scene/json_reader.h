@@ -41,7 +41,8 @@ public:
   std::size_t size() const;
   JsonNode operator[](std::size_t i) const;
 
-  // Scalars. number() rejects NaN/Inf (also as strings) and values outside [lo, hi].
+  // Scalars. number() rejects NaN/Inf (also as strings), numbers beyond float32's range (the GPU's),
+  // and values outside [lo, hi].
   double number() const;
   double number(double lo, double hi) const;
   double positive() const; // > 0
@@ -56,6 +57,7 @@ public:
   glm::dvec3 nonZeroVec3() const;
 
 private:
+  double finiteNumber() const; // a finite double, before any range check
   std::string childPath(std::string_view key) const;
   std::string typeName() const;
 

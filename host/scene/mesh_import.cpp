@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <limits>
+#include <string_view>
 #include <unordered_map>
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "scene/json_reader.h"
 #include "scene/scene_limits.h"
 #include "util/error.h"
 
@@ -57,6 +61,28 @@ std::vector<dvec3> smoothNormals(const std::vector<dvec3>& world,
   return sums;
 }
 
+// Text in an encoding the readers do not read (they read ASCII and UTF-8): the name of the encoding,
+// from a byte-order mark or, without one, from the NUL bytes that UTF-16 and UTF-32 put in ASCII
+// text; empty when the text may be read.
+std::string unreadableEncoding(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  auto starts = [&](std::string_view bom) { return head.compare(0, bom.size(), bom) == 0; };
+  using namespace std::string_view_literals;
+  if (starts("\x00\x00\xFE\xFF"sv)) return "UTF-32 (big endian)";
+  if (starts("\xFF\xFE\x00\x00"sv)) return "UTF-32 (little endian)";
+  if (starts("\xFE\xFF"sv)) return "UTF-16 (big endian)";
+  if (starts("\xFF\xFE"sv)) return "UTF-16 (little endian)";
+  std::size_t nul = static_cast<std::size_t>(std::count(head.begin(), head.end(), '\0'));
+  // ASCII as UTF-16 is half NULs, as UTF-32 three quarters; text has none.
+  if (head.size() >= 8 && nul * 4 >= head.size()) {
+    return nul * 2 > head.size() ? "UTF-32 (no byte-order mark)" : "UTF-16 (no byte-order mark)";
+  }
+  return {};
+}
+
 } // namespace
 
 glm::dmat4 composeTransform(const dvec3& translate, const dvec3& rotateDegrees, const dvec3& scale) {
@@ -97,6 +123,19 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       }
       if (!finite(world[v])) {
         throw InputError(where, "vertex " + std::to_string(v) + " overflows under the mesh's transform");
+      }
+      for (int k = 0; k < 3; ++k) {
+        double c = std::abs(world[v][k]);
+        if (c > kMaxCoordinate) {
+          // Past float32's range the GPU would see infinity; past kMaxCoordinate its squared distances overflow.
+          bool pastFloat = c > static_cast<double>(std::numeric_limits<float>::max());
+          throw InputError(where, "vertex " + std::to_string(v) + " (used by face " + std::to_string(f) + ") has " +
+                                      "xyz"[k] + " = " + formatNumber(world[v][k]) +
+                                      (pastFloat ? ", outside float32's range (+-3.40282347e+38)"
+                                                 : ", past +-1e+18, where the kernel's squared distances overflow "
+                                                   "float32") +
+                                      (m == glm::dmat4(1.0) ? "" : " (after the mesh's transform)"));
+        }
       }
     }
   }
@@ -186,6 +225,21 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
     scene.triangles.push_back(t);
   }
   info.triangleCount = scene.triangles.size() - info.firstTriangle;
+  // A file that adds nothing a ray can hit is a mistake (a wrong file, a failed export), never an
+  // empty picture.
+  if (info.triangleCount == 0) {
+    if (faceCount > 0) {
+      throw InputError(where, "no triangles: all " + std::to_string(faceCount) +
+                                  " of its faces are degenerate (zero area), nothing a ray can hit");
+    }
+    std::string reason = data.noTrianglesReason;
+    if (reason.empty()) {
+      reason = data.positions.empty() ? "the file has no vertices and no faces"
+                                      : "the file has " + std::to_string(data.positions.size()) +
+                                            " vertices but no faces (a point cloud?)";
+    }
+    throw InputError(where, "no triangles: " + reason + "; nothing a ray can hit");
+  }
   scene.meshes.push_back(info);
 
   for (PointLight light : data.lights) {
@@ -211,6 +265,13 @@ std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene) {
   if (ec || !std::filesystem::exists(status)) throw InputError(request.shownAs, "no such file");
   if (std::filesystem::is_directory(status)) throw InputError(request.shownAs, "is a directory, not a mesh file");
   std::string ext = lowerExtension(request.file);
+  if (ext == ".obj" || ext == ".gltf") {
+    std::string encoding = unreadableEncoding(request.file);
+    if (!encoding.empty()) {
+      throw InputError(request.shownAs, "is " + encoding + " text; vkray reads " + ext.substr(1) +
+                                            " files as ASCII or UTF-8 (convert it: iconv -t UTF-8)");
+    }
+  }
   MeshData data;
   if (ext == ".obj") {
     data = readObj(request);

@@ -29,6 +29,7 @@ struct MeshData {
   std::vector<Material> materials;                       // named "file: material"
   std::optional<Camera> camera;                          // the first camera, when asked for
   std::vector<PointLight> lights;                        // when asked for
+  std::string noTrianglesReason; // the reader's word on why the file has no faces ("points only")
 };
 
 enum class MeshNormals {
@@ -46,6 +47,9 @@ struct MeshRequest {
   MeshNormals normals = MeshNormals::Auto;
   bool importCamera = false;
   bool importLights = false;
+  // A model opened as a scene: its first perspective camera and its point and spot lights when it
+  // has any; none, or kinds vkray lacks, are left out without an error.
+  bool importPresent = false;
   double lightScale = 1.0; // imported light colours are multiplied by this
   // The scene material of faces the file gives none (called once, when first needed). Unset:
   // appendMesh adds a default grey material itself.
