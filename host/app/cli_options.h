@@ -2,11 +2,13 @@
 // scene's render settings. Flags always win over the scene file.
 #pragma once
 
+#include <filesystem>
 #include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
+#include "scene/model_scene.h"
 #include "scene/scene.h"
 #include "vk/context.h"
 
@@ -27,6 +29,12 @@ struct RenderFlags {
   std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision;
 };
 
+// How a model file (.obj, .gltf, .glb) given in place of a scene is staged.
+struct ModelFlags {
+  bool floor = false;                    // --floor
+  std::optional<std::string> background; // --background r,g,b (linear)
+};
+
 // A check that a real number lies in [lo, hi], whose message prints the bounds as written
 // ("not in range 1 to 10000"; CLI::Range prints doubles with six decimals) and refuses NaN.
 CLI::Validator realRange(double lo, double hi);
@@ -36,5 +44,8 @@ void addDeviceFlags(CLI::App& app, DeviceFlags& flags);
 vulkan::ContextOptions contextOptions(const DeviceFlags& flags);
 void addRenderFlags(CLI::App& app, RenderFlags& flags);
 void applyRenderFlags(const RenderFlags& flags, RenderSettings& settings);
+void addModelFlags(CLI::App& app, ModelFlags& flags);
+// The flags as options for loadScene; either flag on a scene file (not a model) is an InputError.
+ModelSceneOptions modelSceneOptions(const ModelFlags& flags, const std::filesystem::path& scene);
 
 } // namespace vkray

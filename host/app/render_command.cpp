@@ -57,8 +57,9 @@ vulkan::Context openContext(const vulkan::ContextOptions& options) {
 
 int runRender(const RenderArgs& args) {
   auto t0 = Clock::now();
-  Scene scene = loadScene(args.scene);
+  Scene scene = loadScene(args.scene, modelSceneOptions(args.model, args.scene));
   applyRenderFlags(args.render, scene.render);
+  refitCamera(scene); // a fitted camera frames the image as the flags shaped it
   double loadMs = msSince(t0);
   // Fail on an unwritable output before spending any time on the GPU.
   checkOutputPath(args.output);
@@ -131,8 +132,9 @@ int runRender(const RenderArgs& args) {
                                           : "storage and texel buffers");
     printStat("load", loadMs);
     for (const MeshInfo& m : scene.meshes) {
-      std::printf("mesh %s: %zu triangles, %zu degenerate dropped\n", m.file.c_str(), m.triangleCount,
-                  m.droppedDegenerate);
+      Bounds b = meshBounds(scene, m);
+      std::printf("mesh %s: %zu triangles, %zu degenerate dropped, bounds [%g, %g, %g] to [%g, %g, %g]\n",
+                  m.file.c_str(), m.triangleCount, m.droppedDegenerate, b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
     }
     if (renderer.gpuScene().bvh.stats.nodes > 0) {
       const auto& b = renderer.gpuScene().bvh.stats;

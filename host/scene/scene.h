@@ -116,6 +116,9 @@ struct Scene {
   std::vector<Polygon> polygons;
   std::vector<Triangle> triangles;
   std::vector<MeshInfo> meshes;
+  // camera.fit: the camera frames every bounded object, looking from this direction (model_scene.h);
+  // refitCamera() redoes it when the image's aspect changes.
+  std::optional<glm::dvec3> fitFrom;
 
   std::size_t boundedPrimitiveCount() const { return spheres.size() + polygons.size() + triangles.size(); }
   std::size_t objectCount() const { return boundedPrimitiveCount() + planes.size(); }

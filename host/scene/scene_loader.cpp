@@ -9,6 +9,7 @@
 
 #include "scene/json_reader.h"
 #include "scene/mesh_import.h"
+#include "scene/model_scene.h"
 #include "scene/scene_limits.h"
 #include "util/error.h"
 
@@ -26,10 +27,40 @@ struct LoadContext {
   std::string importedCameraFrom;       // that object's JSON path
 };
 
-void readCamera(const JsonNode& node, Camera& camera) {
-  node.allowKeys({"position", "look_at", "up", "fov_y"});
-  camera.position = node.at("position").vec3();
-  camera.lookAt = node.at("look_at").vec3();
+// Why a length beyond kMaxCoordinate is refused (scene_limits.h).
+std::string squaredPastFloat(double v, const char* squared) {
+  return "the kernel squares " + std::string(squared) + " in float32, and " + formatNumber(v) +
+         " squared is past float32's 3.4e+38";
+}
+
+// A position the kernel sees: every coordinate within kMaxCoordinate.
+dvec3 readPoint(const JsonNode& node) {
+  dvec3 p = node.vec3();
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (std::abs(p[static_cast<int>(i)]) > kMaxCoordinate) {
+      node[i].fail("must be within +-" + formatNumber(kMaxCoordinate) + ", got " +
+                   formatNumber(p[static_cast<int>(i)]) + ": " + squaredPastFloat(p[static_cast<int>(i)], "distances"));
+    }
+  }
+  return p;
+}
+
+// A camera placed by hand, or `"fit": true` (optionally `"from"`: the direction it looks from),
+// placed after the objects are read (model_scene.h: fitCamera). Returns whether it is to be fitted.
+bool readCamera(const JsonNode& node, Camera& camera, glm::dvec3& fitFrom) {
+  node.allowKeys({"position", "look_at", "up", "fov_y", "fit", "from"});
+  bool fit = false;
+  if (auto f = node.find("fit")) fit = f->boolean();
+  if (fit) {
+    for (const char* key : {"position", "look_at"}) {
+      if (auto k = node.find(key)) k->fail("give either camera.fit or camera." + std::string(key) + ", not both");
+    }
+    if (auto from = node.find("from")) fitFrom = from->nonZeroVec3();
+  } else {
+    if (auto from = node.find("from")) from->fail("only with \"fit\": true");
+    camera.position = readPoint(node.at("position"));
+    camera.lookAt = readPoint(node.at("look_at"));
+  }
   if (auto up = node.find("up")) camera.up = up->nonZeroVec3();
   if (auto fov = node.find("fov_y")) {
     camera.fovY = fov->number();
@@ -37,9 +68,16 @@ void readCamera(const JsonNode& node, Camera& camera) {
       fov->fail("must be in (0, 180) degrees, got " + formatNumber(camera.fovY));
     }
   }
+  if (fit) {
+    if (glm::length(glm::cross(glm::normalize(fitFrom), glm::normalize(camera.up))) < 1e-9) {
+      node.fail("camera.from must not be parallel to camera.up");
+    }
+    return true;
+  }
   if (glm::length(camera.lookAt - camera.position) == 0.0) {
     node.at("look_at").fail("must differ from camera.position");
   }
+  return false;
 }
 
 void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sawAmbient) {
@@ -164,7 +202,7 @@ void readLights(const JsonNode& node, Scene& scene) {
     l.allowKeys({"type", "position", "color", "shadows"});
     if (auto t = l.find("type")) t->choice({"point"});
     PointLight light;
-    light.position = l.at("position").vec3();
+    light.position = readPoint(l.at("position"));
     if (auto c = l.find("color")) light.color = c->color();
     if (auto s = l.find("shadows")) light.shadows = s->boolean();
     scene.lights.push_back(light);
@@ -193,7 +231,7 @@ void readPolygon(const JsonNode& obj, LoadContext& ctx) {
     verts.fail("at most " + std::to_string(kMaxPolygonVertices) + " vertices, got " + std::to_string(verts.size()));
   }
   Polygon poly;
-  for (std::size_t i = 0; i < verts.size(); ++i) poly.vertices.push_back(verts[i].vec3());
+  for (std::size_t i = 0; i < verts.size(); ++i) poly.vertices.push_back(readPoint(verts[i]));
   const auto& v = poly.vertices;
   double extent = 0.0;
   for (std::size_t i = 0; i < v.size(); ++i) {
@@ -241,7 +279,7 @@ void readTriangle(const JsonNode& obj, LoadContext& ctx) {
   verts.expectArray();
   if (verts.size() != 3) verts.fail("a triangle needs exactly 3 vertices, got " + std::to_string(verts.size()));
   Triangle tri;
-  for (std::size_t i = 0; i < 3; ++i) tri.v[i] = verts[i].vec3();
+  for (std::size_t i = 0; i < 3; ++i) tri.v[i] = readPoint(verts[i]);
   dvec3 n = glm::cross(tri.v[1] - tri.v[0], tri.v[2] - tri.v[0]);
   if (glm::length(n) == 0.0) verts.fail("is degenerate (zero area)");
   if (auto normals = obj.find("normals")) {
@@ -342,8 +380,13 @@ void readObjects(const JsonNode& node, LoadContext& ctx) {
     if (type == "sphere") {
       obj.allowKeys({"type", "center", "radius", "material"});
       Sphere s;
-      s.center = obj.at("center").vec3();
-      s.radius = obj.at("radius").positive();
+      s.center = readPoint(obj.at("center"));
+      JsonNode radius = obj.at("radius");
+      s.radius = radius.positive();
+      if (s.radius > kMaxCoordinate) {
+        radius.fail("must be at most " + formatNumber(kMaxCoordinate) + ", got " + formatNumber(s.radius) + ": " +
+                    squaredPastFloat(s.radius, "the radius (radius^2 in the sphere test)"));
+      }
       s.material = readObjectMaterial(obj, ctx);
       ctx.scene.spheres.push_back(s);
     } else if (type == "plane") {
@@ -353,8 +396,14 @@ void readObjects(const JsonNode& node, LoadContext& ctx) {
       double len = glm::length(n);
       p.normal = n / len;
       if (obj.find("offset") && obj.find("point")) obj.fail("give either 'offset' or 'point', not both");
-      if (auto d = obj.find("offset")) p.offset = d->number() / len;
-      if (auto pt = obj.find("point")) p.offset = -glm::dot(p.normal, pt->vec3());
+      if (auto d = obj.find("offset")) {
+        p.offset = d->number() / len;
+        if (std::abs(p.offset) > kMaxCoordinate) {
+          d->fail("puts the plane " + formatNumber(std::abs(p.offset)) + " from the origin, past " +
+                  formatNumber(kMaxCoordinate) + ": " + squaredPastFloat(p.offset, "distances"));
+        }
+      }
+      if (auto pt = obj.find("point")) p.offset = -glm::dot(p.normal, readPoint(*pt));
       p.material = readObjectMaterial(obj, ctx);
       ctx.scene.planes.push_back(p);
     } else if (type == "polygon") {
@@ -380,7 +429,8 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
   if (auto d = root.find("description")) d->string();
   // The camera may instead come from a glTF file (a mesh object with import_camera).
   auto cameraNode = root.find("camera");
-  if (cameraNode) readCamera(*cameraNode, scene.camera);
+  glm::dvec3 fitFrom = kThreeQuarterView;
+  bool fit = cameraNode && readCamera(*cameraNode, scene.camera, fitFrom);
   bool sawBackground = false;
   bool sawAmbient = false;
   if (auto img = root.find("image")) readImage(*img, scene, sawBackground, sawAmbient);
@@ -401,6 +451,12 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
     scene.camera = *ctx.importedCamera;
   } else if (!cameraNode) {
     root.at("camera"); // throws: missing required key
+  } else if (fit) {
+    double aspect = static_cast<double>(scene.render.width) / scene.render.height;
+    Camera fitted = fitCamera(sceneBounds(scene), fitFrom, scene.camera.fovY, aspect, name + ": camera.fit");
+    fitted.up = scene.camera.up;
+    scene.camera = fitted;
+    scene.fitFrom = fitFrom;
   }
   if (scene.materials.size() > kMaxMaterialCount) {
     root.at("materials")
@@ -474,7 +530,8 @@ Scene loadSceneFromString(const std::string& text, const std::string& name, cons
   return scene;
 }
 
-Scene loadScene(const std::filesystem::path& path) {
+Scene loadScene(const std::filesystem::path& path, const ModelSceneOptions& model) {
+  if (isModelFile(path)) return loadModelScene(path, model);
   Scene scene = loadSceneFromString(readSceneFile(path, path.string()), path.string(), path.parent_path());
   scene.path = path;
   return scene;
