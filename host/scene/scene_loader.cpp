@@ -249,11 +249,35 @@ void readPolygon(const JsonNode& obj, LoadContext& ctx) {
   dvec3 centroid(0.0);
   for (auto& p : v) centroid += p;
   centroid /= static_cast<double>(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    double d = std::abs(glm::dot(n, v[i] - centroid));
-    if (d > 1e-6 * extent) {
-      verts.fail("is not planar: vertex " + std::to_string(i) + " is " + formatNumber(d) + " off the polygon's plane");
+  bool planar = true;
+  for (std::size_t i = 0; i < v.size(); ++i) planar = planar && std::abs(glm::dot(n, v[i] - centroid)) <= 1e-6 * extent;
+  if (!planar) {
+    // Off the plane through all of them, every vertex of a twisted quad is equally far: the one to
+    // name is the vertex furthest from the plane of the others, where the others lie flattest.
+    std::size_t worst = 0;
+    double worstScore = -1.0, worstDistance = 0.0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      std::vector<dvec3> others;
+      for (std::size_t j = 0; j < v.size(); ++j) {
+        if (j != i) others.push_back(v[j]);
+      }
+      dvec3 on = newellNormal(others);
+      if (!(glm::length(on) > 0.0)) continue; // the others are collinear: no plane
+      on = glm::normalize(on);
+      dvec3 oc(0.0);
+      for (auto& p : others) oc += p;
+      oc /= static_cast<double>(others.size());
+      double residual = 0.0;
+      for (auto& p : others) residual = std::max(residual, std::abs(glm::dot(on, p - oc)));
+      double d = std::abs(glm::dot(on, v[i] - oc));
+      if (d - residual > worstScore) {
+        worst = i;
+        worstScore = d - residual;
+        worstDistance = d;
+      }
     }
+    verts.fail("is not planar: vertex " + std::to_string(worst) + " is " + formatNumber(worstDistance) +
+               " off the plane of the others");
   }
   // Convexity: every turn the same way round the normal, and one full turn in total (a star
   // pentagram turns the same way everywhere but twice around).
