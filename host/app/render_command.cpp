@@ -125,7 +125,9 @@ int runRender(const RenderArgs& args) {
     std::printf("image: %ux%u\n", scene.render.width, scene.render.height);
     std::printf("spp: %d\n", scene.render.spp);
     std::printf("max depth: %d\n", scene.render.maxDepth);
-    for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
+    if (!args.explain) { // --explain printed the same lines above
+      for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
+    }
     std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers"
                                       : renderer.usesUniformShading()
                                           ? "materials, lights, planes uniform; primitives in storage and texel buffers"
@@ -154,9 +156,15 @@ int runRender(const RenderArgs& args) {
     }
     printStat("upload", renderer.uploadMs());
     printStat("pipeline", result.timings.pipelineMs);
-    std::printf("pipeline cache: %s\n", !cache                    ? "off"
-                                        : cache->loadedFromDisk() ? "loaded from disk"
-                                                                  : "empty (first run on this device)");
+    if (!cache) {
+      std::printf("pipeline cache: off\n");
+    } else if (std::size_t kept = cache->keptBytes(); kept == 0) {
+      // The driver accepts the cache but stores nothing in it: every run compiles the kernel anew.
+      std::printf("pipeline cache: 0 bytes kept by the driver (it recompiles every run)\n");
+    } else {
+      std::printf("pipeline cache: %zu bytes kept by the driver, %s\n", kept,
+                  cache->loadedFromDisk() ? "loaded from disk" : "empty before this run (first run on this device)");
+    }
     printStat("trace", result.timings.traceMs);
     printStat("trace wall", result.timings.traceWallMs);
     std::printf("bands: %d\n", result.timings.bands);
