@@ -154,6 +154,19 @@ std::size_t findToken(const std::string& text, const std::string& token) {
 
 } // namespace
 
+std::string closestMatch(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t bestDistance = 3; // suggest only close matches
+  for (const auto& candidate : candidates) {
+    std::size_t d = editDistance(word, candidate);
+    if (d < bestDistance) {
+      bestDistance = d;
+      best = candidate;
+    }
+  }
+  return best;
+}
+
 std::string formatNumber(double v) {
   char buf[64];
   std::snprintf(buf, sizeof buf, "%.9g", v);
@@ -256,17 +269,9 @@ void JsonNode::allowKeys(std::initializer_list<std::string_view> keys) const {
   for (auto it = value_->begin(); it != value_->end(); ++it) {
     const std::string& k = it.key();
     if (std::find(keys.begin(), keys.end(), k) != keys.end()) continue;
-    std::string_view best;
-    std::size_t bestDistance = 3; // suggest only close matches
-    for (auto candidate : keys) {
-      std::size_t d = editDistance(k, candidate);
-      if (d < bestDistance) {
-        bestDistance = d;
-        best = candidate;
-      }
-    }
+    std::string best = closestMatch(k, std::vector<std::string>(keys.begin(), keys.end()));
     std::string msg = "unknown key '" + k + "'";
-    if (!best.empty()) msg += " (did you mean '" + std::string(best) + "'?)";
+    if (!best.empty()) msg += " (did you mean '" + best + "'?)";
     fail(msg);
   }
 }

@@ -69,6 +69,10 @@ private:
 // Parses text as JSON with // and /* */ comments; a syntax error names the line and column.
 nlohmann::json parseJsonText(const std::string& text, const std::string& file);
 
+// The candidate closest to `word` by edit distance, if it is close (fewer than 3 edits), else empty:
+// the "did you mean" of unknown keys, flags and subcommands.
+std::string closestMatch(std::string_view word, const std::vector<std::string>& candidates);
+
 // Formats a double for messages without trailing noise ("-1", "0.25", "1e+30").
 std::string formatNumber(double v);
 
