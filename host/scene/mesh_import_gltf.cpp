@@ -646,7 +646,10 @@ MeshData readGltf(const MeshRequest& request) {
     try {
       doc = parseJsonText(json, request.shownAs);
     } catch (const InputError& e) {
-      throw InputError("", std::string("not a valid glTF file: ") + e.what());
+      // "file:3:14: invalid JSON: ..." -> "file: not a valid glTF file: at 3:14: invalid JSON: ..."
+      std::string what = e.what();
+      if (what.rfind(request.shownAs + ":", 0) == 0) what = "at " + what.substr(request.shownAs.size() + 1);
+      throw InputError(request.shownAs, "not a valid glTF file: " + what);
     }
     GltfPreflight(doc, request.shownAs).check();
   }
