@@ -293,6 +293,18 @@ TEST(HardeningFloat32, MeshVertexPastFloat32IsNamedByFileAndVertex) {
       << what2;
 }
 
+TEST(HardeningFloat32, MeshMaterialPastFloat32IsNamed) {
+  fs::path dir = fs::temp_directory_path() / ("vkray-model-test-" + std::to_string(::getpid()));
+  fs::create_directories(dir);
+  std::ofstream(dir / "hot.mtl") << "newmtl hot\nKd 1e39 0 0\n";
+  fs::path f = dir / "hot.obj";
+  std::ofstream(f) << "mtllib hot.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl hot\nf 1 2 3\n";
+  std::string what = refusal(f);
+  fs::remove_all(dir);
+  EXPECT_EQ(what, f.string() + ": material '" + f.string() +
+                      ": hot' has 1e+39, outside float32's range (+-3.40282347e+38; the GPU computes in float32)");
+}
+
 TEST(HardeningPolygon, NonPlanarPolygonNamesTheVertexOffThePlane) {
   for (int lifted = 0; lifted < 4; ++lifted) {
     json verts = json::array({{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}});

@@ -25,6 +25,10 @@ bool finite(const dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
 }
 
+bool inFloat32(double v) {
+  return std::abs(v) <= static_cast<double>(std::numeric_limits<float>::max());
+}
+
 std::string lowerExtension(const std::filesystem::path& p) {
   std::string ext = p.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -160,8 +164,15 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       return fallback;
     }
     if (sceneMaterial[fm] == MeshData::kNone) {
+      const Material& mat = data.materials[fm];
+      for (double v : {mat.color.x, mat.color.y, mat.color.z, mat.diffuse, mat.specular, mat.shininess}) {
+        if (!inFloat32(v)) {
+          throw InputError(where, "material '" + mat.name + "' has " + formatNumber(v) +
+                                      ", outside float32's range (+-3.40282347e+38; the GPU computes in float32)");
+        }
+      }
       sceneMaterial[fm] = static_cast<std::uint32_t>(scene.materials.size());
-      scene.materials.push_back(data.materials[fm]);
+      scene.materials.push_back(mat);
     }
     return sceneMaterial[fm];
   };
@@ -242,9 +253,21 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
   }
   scene.meshes.push_back(info);
 
-  for (PointLight light : data.lights) {
+  for (std::size_t i = 0; i < data.lights.size(); ++i) {
+    PointLight light = data.lights[i];
     light.position = dvec3(m * glm::dvec4(light.position, 1.0));
     light.color *= request.lightScale;
+    for (int k = 0; k < 3; ++k) {
+      if (!(std::abs(light.position[k]) <= kMaxCoordinate)) {
+        throw InputError(where, "light " + std::to_string(i) + " is at " + "xyz"[k] + " = " +
+                                    formatNumber(light.position[k]) +
+                                    ", past +-1e+18, where the kernel's squared distances overflow float32");
+      }
+      if (!inFloat32(light.color[k])) {
+        throw InputError(where, "light " + std::to_string(i) + " has colour x intensity " +
+                                    formatNumber(light.color[k]) + ", outside float32's range (+-3.40282347e+38)");
+      }
+    }
     scene.lights.push_back(light);
   }
   std::optional<Camera> camera;
@@ -254,6 +277,12 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
     c.position = dvec3(m * glm::dvec4(c.position, 1.0));
     c.lookAt = c.position + forward;
     c.up = linear * c.up;
+    for (int k = 0; k < 3; ++k) {
+      if (!(std::abs(c.position[k]) <= kMaxCoordinate)) {
+        throw InputError(where, std::string("the camera is at ") + "xyz"[k] + " = " + formatNumber(c.position[k]) +
+                                    ", past +-1e+18, where the kernel's squared distances overflow float32");
+      }
+    }
     camera = c;
   }
   return camera;
