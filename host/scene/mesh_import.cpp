@@ -288,6 +288,13 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
   return camera;
 }
 
+MeshReader meshReaderFor(const std::filesystem::path& file) {
+  std::string ext = lowerExtension(file);
+  if (ext == ".obj") return readObj;
+  if (ext == ".gltf" || ext == ".glb") return readGltf;
+  return nullptr;
+}
+
 std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene) {
   std::error_code ec;
   auto status = std::filesystem::status(request.file, ec);
@@ -301,15 +308,9 @@ std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene) {
                                             " files as ASCII or UTF-8 (convert it: iconv -t UTF-8)");
     }
   }
-  MeshData data;
-  if (ext == ".obj") {
-    data = readObj(request);
-  } else if (ext == ".gltf" || ext == ".glb") {
-    data = readGltf(request);
-  } else {
-    throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf and .glb)");
-  }
-  return appendMesh(data, request, scene);
+  MeshReader read = meshReaderFor(request.file);
+  if (!read) throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf and .glb)");
+  return appendMesh(read(request), request, scene);
 }
 
 } // namespace vkray

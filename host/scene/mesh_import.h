@@ -60,6 +60,12 @@ struct MeshRequest {
 MeshData readObj(const MeshRequest& request);
 MeshData readGltf(const MeshRequest& request);
 
+// The reader for a file, by extension (any case): readObj for .obj, readGltf for .gltf and .glb;
+// nullptr for formats vkray does not read. The one list of mesh formats: importMesh dispatches
+// through it, and model_scene.h's isModelFile asks it.
+using MeshReader = MeshData (*)(const MeshRequest&);
+MeshReader meshReaderFor(const std::filesystem::path& file);
+
 // Reads the file (by extension: .obj, .gltf, .glb), transforms it and appends its triangles,
 // materials, camera and lights to the scene; records a MeshInfo. Degenerate triangles (zero area
 // after the transform, in double) are dropped and counted. Returns the imported camera, if any.

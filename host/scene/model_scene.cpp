@@ -10,18 +10,7 @@
 
 namespace vkray {
 
-namespace {
-
 using glm::dvec3;
-
-std::string lowerExtension(const std::filesystem::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
-}
-
-} // namespace
 
 Bounds sceneBounds(const Scene& scene) {
   Bounds b;
@@ -90,8 +79,7 @@ void addDefaultLights(const Bounds& bounds, const Camera& camera, Scene& scene) 
 }
 
 bool isModelFile(const std::filesystem::path& path) {
-  std::string ext = lowerExtension(path);
-  return ext == ".obj" || ext == ".gltf" || ext == ".glb";
+  return meshReaderFor(path) != nullptr;
 }
 
 Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions& options) {

@@ -54,7 +54,8 @@ void refitCamera(Scene& scene);
 // soft ambient light.
 void addDefaultLights(const Bounds& bounds, const Camera& camera, Scene& scene);
 
-// .obj, .gltf and .glb (by extension, any case): files `vkray render` and `vkray view` open as scenes.
+// Every format the mesh dispatch reads (mesh_import.h: meshReaderFor; .obj, .gltf, .glb): files
+// `vkray render` and `vkray view` open as scenes.
 bool isModelFile(const std::filesystem::path& path);
 
 struct ModelSceneOptions {
