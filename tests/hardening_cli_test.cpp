@@ -271,7 +271,7 @@ const MalformedScene kMalformedScenes[] = {
     {"empty-vertices.json", "empty-vertices.json: objects[0].vertices: a polygon needs at least 3 vertices, got 0"},
     {"nan-literal.json", "nan-literal.json:2:50: invalid JSON: syntax error while parsing value - invalid literal"},
     {"nan-string.json", "nan-string.json: lights[0].position[2]: must be a finite number, got NaN"},
-    {"inf-overflow.json", "inf-overflow.json: invalid JSON: number overflow parsing '1e999'"},
+    {"inf-overflow.json", "inf-overflow.json:1:69: invalid JSON: number overflow parsing '1e999'"},
     {"inf-string.json", "inf-string.json: render.bailout: must be a finite number, got -Infinity"},
     {"huge-integer.json", "huge-integer.json: image.width: must be in [1, 16384], got 1e+20"},
     {"absurd-spp.json", "absurd-spp.json: render.spp: must be in [1, 4096], got 1000000"},

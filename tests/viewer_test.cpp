@@ -370,6 +370,15 @@ TEST_F(Viewer, ScreenshotAfterNFramesEqualsTheHeadlessRenderAtNSppBitForBit) {
   expectBitIdentical(viewed, headless);
 }
 
+// A model file opens as a scene in the viewer as in `render`: the same fitted camera, lights and floor.
+TEST_F(Viewer, AModelFileIsASceneAsInTheHeadlessRender) {
+  const std::string model = VKRAY_SOURCE_DIR "/tests/data/meshes/box.obj";
+  const std::string flags = "--width 96 --height 72 --floor --background 0.2,0.3,0.4";
+  Image viewed = view(model, flags + " --frames 2 --spp 1", "model-view.pfm");
+  Image headless = render(model, flags + " --spp 2 --stats", "model-render.pfm");
+  expectBitIdentical(viewed, headless);
+}
+
 // A `name: value` line of --stats output, as a number (NaN when absent).
 double statValue(const std::string& out, const std::string& name) {
   auto at = out.find("\n" + name + ": ");

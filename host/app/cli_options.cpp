@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "scene/scene_limits.h"
+#include "util/error.h"
 
 namespace vkray {
 
@@ -88,6 +89,43 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
   if (f.transmissiveShadows) s.transmissiveShadows = *parseEnum<TransmissiveShadows>(*f.transmissiveShadows);
   if (f.precision) s.precision = *parseEnum<Precision>(*f.precision);
   if (f.bvh) s.bvh = *parseEnum<BvhMode>(*f.bvh);
+}
+
+void addModelFlags(CLI::App& app, ModelFlags& f) {
+  app.add_flag("--floor", f.floor, "model files: a ground plane just under the model");
+  app.add_option("--background", f.background, "model files: background colour r,g,b (linear, >= 0)");
+}
+
+namespace {
+
+glm::dvec3 parseBackground(const std::string& text) {
+  glm::dvec3 c(0.0);
+  std::istringstream in(text);
+  std::string part;
+  int n = 0;
+  while (std::getline(in, part, ',')) {
+    double v = 0.0;
+    if (n >= 3 || !CLI::detail::lexical_cast(part, v) || !(v >= 0.0 && v <= 1e6)) n = 4;
+    if (n >= 3) break;
+    c[n++] = v;
+  }
+  if (n != 3) throw InputError("--background", "expected r,g,b: three numbers in [0, 1e6], got '" + text + "'");
+  return c;
+}
+
+} // namespace
+
+ModelSceneOptions modelSceneOptions(const ModelFlags& f, const std::filesystem::path& scene) {
+  ModelSceneOptions o;
+  if (f.floor && !isModelFile(scene)) {
+    throw InputError("--floor", "only for model files (.obj, .gltf, .glb); a scene file has its own objects");
+  }
+  if (f.background && !isModelFile(scene)) {
+    throw InputError("--background", "only for model files (.obj, .gltf, .glb); a scene file sets its own");
+  }
+  o.floor = f.floor;
+  if (f.background) o.background = parseBackground(*f.background);
+  return o;
 }
 
 } // namespace vkray

@@ -2,12 +2,14 @@
 // scene's render settings. Flags always win over the scene file.
 #pragma once
 
+#include <filesystem>
 #include <optional>
 #include <string>
 
 #include <CLI/CLI.hpp>
 
 #include "render/render_options.h"
+#include "scene/model_scene.h"
 #include "scene/scene.h"
 #include "vk/device_flags.h"
 
@@ -18,6 +20,12 @@ struct RenderFlags {
   std::optional<int> maxDepth, spp;
   std::optional<double> bailout, adaptiveThreshold;
   std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision;
+};
+
+// How a model file (.obj, .gltf, .glb) given in place of a scene is staged.
+struct ModelFlags {
+  bool floor = false;                    // --floor
+  std::optional<std::string> background; // --background r,g,b (linear)
 };
 
 // A check that a real number lies in [lo, hi], whose message prints the bounds as written
@@ -37,5 +45,8 @@ void addKernelFlags(CLI::App& app, KernelFlags& flags);
 void applyKernelFlags(const KernelFlags& flags, RenderOptions& options);
 void addRenderFlags(CLI::App& app, RenderFlags& flags);
 void applyRenderFlags(const RenderFlags& flags, RenderSettings& settings);
+void addModelFlags(CLI::App& app, ModelFlags& flags);
+// The flags as options for loadScene; either flag on a scene file (not a model) is an InputError.
+ModelSceneOptions modelSceneOptions(const ModelFlags& flags, const std::filesystem::path& scene);
 
 } // namespace vkray

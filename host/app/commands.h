@@ -16,6 +16,7 @@ struct RenderArgs {
   std::filesystem::path output;
   DeviceFlags device;
   RenderFlags render;
+  ModelFlags model;
   bool stats = false;
   bool explain = false;
   bool quiet = false;

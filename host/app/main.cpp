@@ -1,6 +1,9 @@
 // vkray: a Whitted ray tracer in a Vulkan compute shader. The command line: render | merge | view | bench | info.
+#include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <string>
+#include <vector>
 
 #include <CLI/CLI.hpp>
 
@@ -8,16 +11,60 @@
 #include "app/bench_meshes.h"
 #include "app/commands.h"
 #include "app/view_command.h"
+#include "scene/json_reader.h"
 #include "util/error.h"
+
+namespace {
+
+// For a command line CLI11 refused: "did you mean --stats?" for the first flag the chosen
+// subcommand does not know, or the subcommand a misspelt one is closest to.
+std::string didYouMean(CLI::App& app, int argc, char** argv) {
+  CLI::App* at = &app;
+  for (bool deeper = true; deeper;) {
+    deeper = false;
+    for (CLI::App* sub : at->get_subcommands([](CLI::App*) { return true; })) {
+      if (sub->parsed()) {
+        at = sub;
+        deeper = true;
+        break;
+      }
+    }
+  }
+  std::vector<std::string> flags, subcommands;
+  for (const CLI::Option* opt : at->get_options()) {
+    for (const auto& name : opt->get_lnames()) flags.push_back("--" + name);
+  }
+  for (const CLI::App* sub : at->get_subcommands([](CLI::App*) { return true; })) {
+    subcommands.push_back(sub->get_name());
+  }
+  for (int i = 1; i < argc; ++i) {
+    std::string arg = argv[i];
+    if (arg.rfind("--", 0) == 0) {
+      arg = arg.substr(0, arg.find('='));
+      if (std::find(flags.begin(), flags.end(), arg) != flags.end()) continue;
+      std::string best = vkray::closestMatch(arg, flags);
+      if (!best.empty()) return " (did you mean " + best + "?)";
+    } else if (!subcommands.empty() && arg[0] != '-' && at->get_name() != argv[i]) {
+      if (std::find(subcommands.begin(), subcommands.end(), arg) != subcommands.end()) continue;
+      std::string best = vkray::closestMatch(arg, subcommands);
+      if (!best.empty()) return " (did you mean '" + best + "'?)";
+    }
+  }
+  return {};
+}
+
+} // namespace
 
 int main(int argc, char** argv) {
   using namespace vkray;
   CLI::App app{"vkray: Whitted-style ray tracing in a Vulkan compute shader"};
+  app.set_version_flag("--version", std::string("vkray ") + VKRAY_VERSION +
+                                        (std::string(VKRAY_GIT_DESCRIBE).empty() ? "" : " (" VKRAY_GIT_DESCRIBE ")"));
   app.require_subcommand(1);
 
   RenderArgs render;
   auto* renderCmd = app.add_subcommand("render", "render a scene to an image file (.png or .pfm)");
-  renderCmd->add_option("scene", render.scene, "scene file (JSON)")->required();
+  renderCmd->add_option("scene", render.scene, "scene file (JSON) or model file (.obj, .gltf, .glb)")->required();
   renderCmd->add_option("-o,--output", render.output, "output image: .png (sRGB 8-bit) or .pfm (linear float)")
       ->required();
   renderCmd->add_flag("--stats", render.stats, "print timings, ray counts and rays per second as 'name: value' lines");
@@ -34,6 +81,7 @@ int main(int argc, char** argv) {
                         "render only band I of N horizontal bands (I from 1), to a .pfm tile for 'vkray merge'");
   addRenderFlags(*renderCmd, render.render);
   addKernelFlags(*renderCmd, render.kernel);
+  addModelFlags(*renderCmd, render.model);
   addDeviceFlags(*renderCmd, render.device);
 
   MergeArgs merge;
@@ -99,7 +147,7 @@ int main(int argc, char** argv) {
     // --help prints as CLI11 does; a bad command line is one line and exit 1 like every other
     // error ("vkray: error: --spp: Value 4097 not in range 1 to 4096").
     if (e.get_exit_code() == 0) return app.exit(e);
-    std::fprintf(stderr, "vkray: error: %s\n", e.what());
+    std::fprintf(stderr, "vkray: error: %s%s\n", e.what(), didYouMean(app, argc, argv).c_str());
     return 1;
   }
 

@@ -173,15 +173,18 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   std::printf("image: %ux%u\n", scene.render.width, scene.render.height);
   std::printf("spp: %d\n", scene.render.spp);
   std::printf("max depth: %d\n", scene.render.maxDepth);
-  for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
+  if (!args.explain) { // --explain printed the same lines above
+    for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
+  }
   std::printf("scene memory: %s\n", renderer.usesUniformScene() ? "uniform buffers"
                                     : renderer.usesUniformShading()
                                         ? "materials, lights, planes uniform; primitives in storage and texel buffers"
                                         : "storage and texel buffers");
   printStat("load", loadMs);
   for (const MeshInfo& m : scene.meshes) {
-    std::printf("mesh %s: %zu triangles, %zu degenerate dropped\n", m.file.c_str(), m.triangleCount,
-                m.droppedDegenerate);
+    Bounds b = meshBounds(scene, m);
+    std::printf("mesh %s: %zu triangles, %zu degenerate dropped, bounds [%g, %g, %g] to [%g, %g, %g]\n", m.file.c_str(),
+                m.triangleCount, m.droppedDegenerate, b.lo.x, b.lo.y, b.lo.z, b.hi.x, b.hi.y, b.hi.z);
   }
   if (renderer.gpuScene().bvh.stats.nodes > 0) {
     const auto& b = renderer.gpuScene().bvh.stats;
@@ -201,9 +204,15 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   }
   printStat("upload", renderer.uploadMs());
   printStat("pipeline", result.timings.pipelineMs);
-  std::printf("pipeline cache: %s\n", !cache                    ? "off"
-                                      : cache->loadedFromDisk() ? "loaded from disk"
-                                                                : "empty (first run on this device)");
+  if (!cache) {
+    std::printf("pipeline cache: off\n");
+  } else if (std::size_t kept = cache->keptBytes(); kept == 0) {
+    // The driver accepts the cache but stores nothing in it: every run compiles the kernel anew.
+    std::printf("pipeline cache: 0 bytes kept by the driver (it recompiles every run)\n");
+  } else {
+    std::printf("pipeline cache: %zu bytes kept by the driver, %s\n", kept,
+                cache->loadedFromDisk() ? "loaded from disk" : "empty before this run (first run on this device)");
+  }
   printStat("trace", result.timings.traceMs);
   printStat("trace wall", result.timings.traceWallMs);
   std::printf("bands: %d\n", result.timings.bands);
@@ -226,8 +235,9 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
 
 int runRender(const RenderArgs& args) {
   auto t0 = Clock::now();
-  Scene scene = loadScene(args.scene);
+  Scene scene = loadScene(args.scene, modelSceneOptions(args.model, args.scene));
   applyRenderFlags(args.render, scene.render);
+  refitCamera(scene); // a fitted camera frames the image as the flags shaped it
   double loadMs = msSince(t0);
   const FrameRange frames = frameRange(args, frameCount(scene));
   const std::optional<TileRequest> tile = tileRequest(args, scene.render);

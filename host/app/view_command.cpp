@@ -11,7 +11,8 @@ namespace vkray {
 
 CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   auto* cmd = app.add_subcommand("view", "open a window on a scene: fly around, change settings live");
-  cmd->add_option("scene", a.scene, "scene file (JSON); reloaded when it changes")->required();
+  cmd->add_option("scene", a.scene, "scene file (JSON) or model file (.obj, .gltf, .glb); reloaded when it changes")
+      ->required();
   cmd->add_option("--frames", a.frames, "scripted: trace this many frames, save --screenshot, exit")
       ->check(CLI::Range(1u, 1u << 20));
   cmd->add_option("--screenshot", a.screenshot,
@@ -37,6 +38,7 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
                   "scripted: also save the window as shown, overlay included (.png or .pfm)");
   addRenderFlags(*cmd, a.render);
   addKernelFlags(*cmd, a.kernel);
+  addModelFlags(*cmd, a.model);
   addDeviceFlags(*cmd, a.device);
   return cmd;
 }
@@ -62,6 +64,7 @@ ViewerOptions baseViewerOptions(const std::filesystem::path& scene, const Render
 
 int runView(const ViewArgs& a) {
   ViewerOptions o = baseViewerOptions(a.scene, a.render, a.kernel, a.device);
+  o.model = modelSceneOptions(a.model, a.scene);
   o.directResolve = !a.noDirectResolve;
   o.vsync = !a.noVsync;
   o.renderScale = a.scale;

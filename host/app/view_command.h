@@ -17,6 +17,7 @@ struct ViewArgs {
   std::filesystem::path scene;
   DeviceFlags device;
   RenderFlags render;
+  ModelFlags model;
   bool noVsync = false;
   bool noOverlay = false;
   bool noRayCounts = false;

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <sstream>
 
 #include "util/error.h"
@@ -123,7 +124,48 @@ std::string lineAndColumn(const std::string& text, std::size_t byte) {
   return std::to_string(line) + ":" + std::to_string(column);
 }
 
+// Where `token` first stands alone (not inside a string, a comment or a longer token), or text.size().
+std::size_t findToken(const std::string& text, const std::string& token) {
+  auto partOfNumber = [](char c) {
+    return std::isalnum(static_cast<unsigned char>(c)) || c == '.' || c == '-' || c == '+';
+  };
+  bool inString = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    char c = text[i];
+    if (inString) {
+      if (c == '\\')
+        ++i;
+      else if (c == '"')
+        inString = false;
+    } else if (c == '"') {
+      inString = true;
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+      i = std::min(text.find('\n', i), text.size());
+    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+      auto end = text.find("*/", i + 2);
+      i = end == std::string::npos ? text.size() : end + 1;
+    } else if (text.compare(i, token.size(), token) == 0 && (i == 0 || !partOfNumber(text[i - 1])) &&
+               (i + token.size() >= text.size() || !partOfNumber(text[i + token.size()]))) {
+      return i;
+    }
+  }
+  return text.size();
+}
+
 } // namespace
+
+std::string closestMatch(std::string_view word, const std::vector<std::string>& candidates) {
+  std::string best;
+  std::size_t bestDistance = 3; // suggest only close matches
+  for (const auto& candidate : candidates) {
+    std::size_t d = editDistance(word, candidate);
+    if (d < bestDistance) {
+      bestDistance = d;
+      best = candidate;
+    }
+  }
+  return best;
+}
 
 std::string formatNumber(double v) {
   char buf[64];
@@ -156,10 +198,18 @@ nlohmann::json parseJsonText(const std::string& text, const std::string& file) {
                      "invalid JSON: " + printable(detail));
   } catch (const nlohmann::json::exception& e) {
     // e.g. "number overflow parsing '1e400'": a number no double can hold.
+    // nlohmann gives no position for it: the number is looked up in the text, where it stands as a
+    // whole token outside strings and comments.
     std::string what = e.what();
     auto close = what.find("] ");
-    throw InputError(printable(file),
-                     "invalid JSON: " + printable(close == std::string::npos ? what : what.substr(close + 2)));
+    std::string where = printable(file);
+    auto open = what.find('\'');
+    auto end = open == std::string::npos ? open : what.find('\'', open + 1);
+    if (end != std::string::npos) {
+      std::string token = what.substr(open + 1, end - open - 1);
+      if (std::size_t at = findToken(text, token); at < text.size()) where += ":" + lineAndColumn(text, at);
+    }
+    throw InputError(where, "invalid JSON: " + printable(close == std::string::npos ? what : what.substr(close + 2)));
   }
 }
 
@@ -219,17 +269,9 @@ void JsonNode::allowKeys(std::initializer_list<std::string_view> keys) const {
   for (auto it = value_->begin(); it != value_->end(); ++it) {
     const std::string& k = it.key();
     if (std::find(keys.begin(), keys.end(), k) != keys.end()) continue;
-    std::string_view best;
-    std::size_t bestDistance = 3; // suggest only close matches
-    for (auto candidate : keys) {
-      std::size_t d = editDistance(k, candidate);
-      if (d < bestDistance) {
-        bestDistance = d;
-        best = candidate;
-      }
-    }
+    std::string best = closestMatch(k, std::vector<std::string>(keys.begin(), keys.end()));
     std::string msg = "unknown key '" + k + "'";
-    if (!best.empty()) msg += " (did you mean '" + std::string(best) + "'?)";
+    if (!best.empty()) msg += " (did you mean '" + best + "'?)";
     fail(msg);
   }
 }
@@ -253,7 +295,7 @@ JsonNode JsonNode::operator[](std::size_t i) const {
   return JsonNode((*value_)[i], path_ + "[" + std::to_string(i) + "]", *file_);
 }
 
-double JsonNode::number() const {
+double JsonNode::finiteNumber() const {
   if (value_->is_string()) {
     // JSON has no NaN/Inf literals; people write them as strings. Name the problem precisely.
     std::string s = value_->get<std::string>();
@@ -268,8 +310,17 @@ double JsonNode::number() const {
   return v;
 }
 
+double JsonNode::number() const {
+  double v = finiteNumber();
+  // The kernel computes in float32: a larger number would reach it as infinity.
+  if (std::abs(v) > static_cast<double>(std::numeric_limits<float>::max())) {
+    fail("must be within float32's range (+-3.40282347e+38; the GPU computes in float32), got " + formatNumber(v));
+  }
+  return v;
+}
+
 double JsonNode::number(double lo, double hi) const {
-  double v = number();
+  double v = finiteNumber();
   if (v < lo || v > hi) {
     fail("must be in [" + formatNumber(lo) + ", " + formatNumber(hi) + "], got " + formatNumber(v));
   }
@@ -283,7 +334,7 @@ double JsonNode::positive() const {
 }
 
 long long JsonNode::integer(long long lo, long long hi) const {
-  double v = number();
+  double v = finiteNumber();
   if (v != std::floor(v)) fail("must be a whole number, got " + formatNumber(v));
   if (v < static_cast<double>(lo) || v > static_cast<double>(hi)) {
     fail("must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " + formatNumber(v));

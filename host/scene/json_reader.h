@@ -43,7 +43,8 @@ public:
   std::size_t size() const;
   JsonNode operator[](std::size_t i) const;
 
-  // Scalars. number() rejects NaN/Inf (also as strings) and values outside [lo, hi].
+  // Scalars. number() rejects NaN/Inf (also as strings), numbers beyond float32's range (the GPU's),
+  // and values outside [lo, hi].
   double number() const;
   double number(double lo, double hi) const;
   double positive() const; // > 0
@@ -61,6 +62,7 @@ public:
   glm::dvec3 nonZeroVec3() const;
 
 private:
+  double finiteNumber() const; // a finite double, before any range check
   std::string childPath(std::string_view key) const;
   std::string typeName() const;
 
@@ -71,6 +73,10 @@ private:
 
 // Parses text as JSON with // and /* */ comments; a syntax error names the line and column.
 nlohmann::json parseJsonText(const std::string& text, const std::string& file);
+
+// The candidate closest to `word` by edit distance, if it is close (fewer than 3 edits), else empty:
+// the "did you mean" of unknown keys, flags and subcommands.
+std::string closestMatch(std::string_view word, const std::vector<std::string>& candidates);
 
 // Formats a double for messages without trailing noise ("-1", "0.25", "1e+30").
 std::string formatNumber(double v);

@@ -4,10 +4,14 @@
 
 #include <algorithm>
 #include <cmath>
+#include <fstream>
+#include <limits>
+#include <string_view>
 #include <unordered_map>
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "scene/json_reader.h"
 #include "scene/scene_limits.h"
 #include "util/error.h"
 
@@ -19,6 +23,10 @@ using glm::dvec3;
 
 bool finite(const dvec3& v) {
   return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z);
+}
+
+bool inFloat32(double v) {
+  return std::abs(v) <= static_cast<double>(std::numeric_limits<float>::max());
 }
 
 std::string lowerExtension(const std::filesystem::path& p) {
@@ -55,6 +63,28 @@ std::vector<dvec3> smoothNormals(const std::vector<dvec3>& world,
     for (std::uint32_t v : f) sums[weld[v]] += n;
   }
   return sums;
+}
+
+// Text in an encoding the readers do not read (they read ASCII and UTF-8): the name of the encoding,
+// from a byte-order mark or, without one, from the NUL bytes that UTF-16 and UTF-32 put in ASCII
+// text; empty when the text may be read.
+std::string unreadableEncoding(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string head(4096, '\0');
+  in.read(head.data(), static_cast<std::streamsize>(head.size()));
+  head.resize(static_cast<std::size_t>(in.gcount()));
+  auto starts = [&](std::string_view bom) { return head.compare(0, bom.size(), bom) == 0; };
+  using namespace std::string_view_literals;
+  if (starts("\x00\x00\xFE\xFF"sv)) return "UTF-32 (big endian)";
+  if (starts("\xFF\xFE\x00\x00"sv)) return "UTF-32 (little endian)";
+  if (starts("\xFE\xFF"sv)) return "UTF-16 (big endian)";
+  if (starts("\xFF\xFE"sv)) return "UTF-16 (little endian)";
+  std::size_t nul = static_cast<std::size_t>(std::count(head.begin(), head.end(), '\0'));
+  // ASCII as UTF-16 is half NULs, as UTF-32 three quarters; text has none.
+  if (head.size() >= 8 && nul * 4 >= head.size()) {
+    return nul * 2 > head.size() ? "UTF-32 (no byte-order mark)" : "UTF-16 (no byte-order mark)";
+  }
+  return {};
 }
 
 } // namespace
@@ -98,6 +128,19 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       if (!finite(world[v])) {
         throw InputError(where, "vertex " + std::to_string(v) + " overflows under the mesh's transform");
       }
+      for (int k = 0; k < 3; ++k) {
+        double c = std::abs(world[v][k]);
+        if (c > kMaxCoordinate) {
+          // Past float32's range the GPU would see infinity; past kMaxCoordinate its squared distances overflow.
+          bool pastFloat = c > static_cast<double>(std::numeric_limits<float>::max());
+          throw InputError(where, "vertex " + std::to_string(v) + " (used by face " + std::to_string(f) + ") has " +
+                                      "xyz"[k] + " = " + formatNumber(world[v][k]) +
+                                      (pastFloat ? ", outside float32's range (+-3.40282347e+38)"
+                                                 : ", past +-1e+18, where the kernel's squared distances overflow "
+                                                   "float32") +
+                                      (m == glm::dmat4(1.0) ? "" : " (after the mesh's transform)"));
+        }
+      }
     }
   }
 
@@ -121,8 +164,15 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       return fallback;
     }
     if (sceneMaterial[fm] == MeshData::kNone) {
+      const Material& mat = data.materials[fm];
+      for (double v : {mat.color.x, mat.color.y, mat.color.z, mat.diffuse, mat.specular, mat.shininess}) {
+        if (!inFloat32(v)) {
+          throw InputError(where, "material '" + mat.name + "' has " + formatNumber(v) +
+                                      ", outside float32's range (+-3.40282347e+38; the GPU computes in float32)");
+        }
+      }
       sceneMaterial[fm] = static_cast<std::uint32_t>(scene.materials.size());
-      scene.materials.push_back(data.materials[fm]);
+      scene.materials.push_back(mat);
     }
     return sceneMaterial[fm];
   };
@@ -186,11 +236,38 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
     scene.triangles.push_back(t);
   }
   info.triangleCount = scene.triangles.size() - info.firstTriangle;
+  // A file that adds nothing a ray can hit is a mistake (a wrong file, a failed export), never an
+  // empty picture.
+  if (info.triangleCount == 0) {
+    if (faceCount > 0) {
+      throw InputError(where, "no triangles: all " + std::to_string(faceCount) +
+                                  " of its faces are degenerate (zero area), nothing a ray can hit");
+    }
+    std::string reason = data.noTrianglesReason;
+    if (reason.empty()) {
+      reason = data.positions.empty() ? "the file has no vertices and no faces"
+                                      : "the file has " + std::to_string(data.positions.size()) +
+                                            " vertices but no faces (a point cloud?)";
+    }
+    throw InputError(where, "no triangles: " + reason + "; nothing a ray can hit");
+  }
   scene.meshes.push_back(info);
 
-  for (PointLight light : data.lights) {
+  for (std::size_t i = 0; i < data.lights.size(); ++i) {
+    PointLight light = data.lights[i];
     light.position = dvec3(m * glm::dvec4(light.position, 1.0));
     light.color *= request.lightScale;
+    for (int k = 0; k < 3; ++k) {
+      if (!(std::abs(light.position[k]) <= kMaxCoordinate)) {
+        throw InputError(where, "light " + std::to_string(i) + " is at " + "xyz"[k] + " = " +
+                                    formatNumber(light.position[k]) +
+                                    ", past +-1e+18, where the kernel's squared distances overflow float32");
+      }
+      if (!inFloat32(light.color[k])) {
+        throw InputError(where, "light " + std::to_string(i) + " has colour x intensity " +
+                                    formatNumber(light.color[k]) + ", outside float32's range (+-3.40282347e+38)");
+      }
+    }
     scene.lights.push_back(light);
   }
   std::optional<Camera> camera;
@@ -200,9 +277,22 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
     c.position = dvec3(m * glm::dvec4(c.position, 1.0));
     c.lookAt = c.position + forward;
     c.up = linear * c.up;
+    for (int k = 0; k < 3; ++k) {
+      if (!(std::abs(c.position[k]) <= kMaxCoordinate)) {
+        throw InputError(where, std::string("the camera is at ") + "xyz"[k] + " = " + formatNumber(c.position[k]) +
+                                    ", past +-1e+18, where the kernel's squared distances overflow float32");
+      }
+    }
     camera = c;
   }
   return camera;
+}
+
+MeshReader meshReaderFor(const std::filesystem::path& file) {
+  std::string ext = lowerExtension(file);
+  if (ext == ".obj") return readObj;
+  if (ext == ".gltf" || ext == ".glb") return readGltf;
+  return nullptr;
 }
 
 std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene) {
@@ -211,15 +301,16 @@ std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene) {
   if (ec || !std::filesystem::exists(status)) throw InputError(request.shownAs, "no such file");
   if (std::filesystem::is_directory(status)) throw InputError(request.shownAs, "is a directory, not a mesh file");
   std::string ext = lowerExtension(request.file);
-  MeshData data;
-  if (ext == ".obj") {
-    data = readObj(request);
-  } else if (ext == ".gltf" || ext == ".glb") {
-    data = readGltf(request);
-  } else {
-    throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf and .glb)");
+  if (ext == ".obj" || ext == ".gltf") {
+    std::string encoding = unreadableEncoding(request.file);
+    if (!encoding.empty()) {
+      throw InputError(request.shownAs, "is " + encoding + " text; vkray reads " + ext.substr(1) +
+                                            " files as ASCII or UTF-8 (convert it: iconv -t UTF-8)");
+    }
   }
-  return appendMesh(data, request, scene);
+  MeshReader read = meshReaderFor(request.file);
+  if (!read) throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf and .glb)");
+  return appendMesh(read(request), request, scene);
 }
 
 } // namespace vkray

@@ -29,6 +29,7 @@ struct MeshData {
   std::vector<Material> materials;                       // named "file: material"
   std::optional<Camera> camera;                          // the first camera, when asked for
   std::vector<PointLight> lights;                        // when asked for
+  std::string noTrianglesReason; // the reader's word on why the file has no faces ("points only")
 };
 
 enum class MeshNormals {
@@ -46,6 +47,9 @@ struct MeshRequest {
   MeshNormals normals = MeshNormals::Auto;
   bool importCamera = false;
   bool importLights = false;
+  // A model opened as a scene: its first perspective camera and its point and spot lights when it
+  // has any; none, or kinds vkray lacks, are left out without an error.
+  bool importPresent = false;
   double lightScale = 1.0; // imported light colours are multiplied by this
   // The scene material of faces the file gives none (called once, when first needed). Unset:
   // appendMesh adds a default grey material itself.
@@ -55,6 +59,12 @@ struct MeshRequest {
 // Readers: the file into MeshData (file frame), or InputError naming the file and the problem.
 MeshData readObj(const MeshRequest& request);
 MeshData readGltf(const MeshRequest& request);
+
+// The reader for a file, by extension (any case): readObj for .obj, readGltf for .gltf and .glb;
+// nullptr for formats vkray does not read. The one list of mesh formats: importMesh dispatches
+// through it, and model_scene.h's isModelFile asks it.
+using MeshReader = MeshData (*)(const MeshRequest&);
+MeshReader meshReaderFor(const std::filesystem::path& file);
 
 // Reads the file (by extension: .obj, .gltf, .glb), transforms it and appends its triangles,
 // materials, camera and lights to the scene; records a MeshInfo. Degenerate triangles (zero area

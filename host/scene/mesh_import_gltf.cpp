@@ -5,11 +5,15 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <iterator>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
+#include <nlohmann/json.hpp>
 #include <tiny_gltf.h>
 
+#include "scene/json_reader.h"
 #include "scene/mesh_import.h"
 #include "util/error.h"
 
@@ -84,17 +88,208 @@ struct AccessorView {
   }
 };
 
+// ---- Before tinygltf -------------------------------------------------------------------------
+// tinygltf skips members of the wrong JSON type without a word (an object where `primitives` must be
+// an array leaves a mesh with no primitives), and it resolves Draco primitives' accessors before
+// anyone can say the file is Draco-compressed. So the JSON is read here first: the members vkray
+// uses are checked for their type, with their JSON path, and unsupported extensions are named.
+
+enum class JsonKind { Object, Array, Integer, Number, String, Boolean };
+
+const char* kindName(JsonKind k) {
+  switch (k) {
+  case JsonKind::Object:
+    return "an object";
+  case JsonKind::Array:
+    return "an array";
+  case JsonKind::Integer:
+    return "an integer";
+  case JsonKind::Number:
+    return "a number";
+  case JsonKind::String:
+    return "a string";
+  default:
+    return "a boolean";
+  }
+}
+
+bool isKind(const nlohmann::json& v, JsonKind k) {
+  switch (k) {
+  case JsonKind::Object:
+    return v.is_object();
+  case JsonKind::Array:
+    return v.is_array();
+  case JsonKind::Integer:
+    return v.is_number_integer() || (v.is_number_float() && v.get<double>() == std::floor(v.get<double>()));
+  case JsonKind::Number:
+    return v.is_number();
+  case JsonKind::String:
+    return v.is_string();
+  default:
+    return v.is_boolean();
+  }
+}
+
+class GltfPreflight {
+public:
+  GltfPreflight(const nlohmann::json& doc, const std::string& where) : doc_(doc), where_(where) {}
+
+  void check() {
+    if (!doc_.is_object()) fail("(top level)", "must be an object");
+    for (const char* list : {"extensionsRequired", "extensionsUsed"}) {
+      if (const auto* v = member(doc_, list, JsonKind::Array, list)) {
+        for (std::size_t i = 0; i < v->size(); ++i) {
+          need((*v)[i], JsonKind::String, std::string(list) + "[" + std::to_string(i) + "]");
+        }
+      }
+    }
+    if (const auto* req = member(doc_, "extensionsRequired", JsonKind::Array, "extensionsRequired")) {
+      for (std::size_t i = 0; i < req->size(); ++i) {
+        std::string ext = (*req)[i].get<std::string>();
+        std::string path = "extensionsRequired[" + std::to_string(i) + "]";
+        if (ext == "KHR_draco_mesh_compression") {
+          fail(path, "the file requires KHR_draco_mesh_compression (Draco-compressed geometry), which vkray does not "
+                     "decode (re-export it without Draco compression)");
+        }
+        if (std::find(std::begin(kSupportedRequired), std::end(kSupportedRequired), ext) ==
+            std::end(kSupportedRequired)) {
+          fail(path, "the file requires extension '" + ext + "', which vkray does not support");
+        }
+      }
+    }
+    member(doc_, "scene", JsonKind::Integer, "scene");
+    eachObject("scenes", [&](const nlohmann::json& s, const std::string& p) { integers(s, "nodes", p); });
+    eachObject("nodes", [&](const nlohmann::json& n, const std::string& p) {
+      integers(n, "children", p);
+      for (const char* k : {"mesh", "camera"}) member(n, k, JsonKind::Integer, p + "." + k);
+      for (const char* k : {"matrix", "translation", "rotation", "scale"}) numbers(n, k, p);
+    });
+    eachObject("meshes", [&](const nlohmann::json& m, const std::string& p) {
+      const auto* prims = member(m, "primitives", JsonKind::Array, p + ".primitives");
+      if (!prims) fail(p, "missing required key 'primitives'");
+      for (std::size_t i = 0; i < prims->size(); ++i) {
+        std::string pp = p + ".primitives[" + std::to_string(i) + "]";
+        const auto& prim = (*prims)[i];
+        need(prim, JsonKind::Object, pp);
+        if (const auto* attrs = member(prim, "attributes", JsonKind::Object, pp + ".attributes")) {
+          for (auto it = attrs->begin(); it != attrs->end(); ++it) {
+            need(it.value(), JsonKind::Integer, pp + ".attributes." + it.key());
+          }
+        }
+        for (const char* k : {"indices", "material", "mode"}) member(prim, k, JsonKind::Integer, pp + "." + k);
+        if (const auto* ext = member(prim, "extensions", JsonKind::Object, pp + ".extensions")) {
+          if (ext->contains("KHR_draco_mesh_compression")) {
+            fail(pp + ".extensions.KHR_draco_mesh_compression",
+                 "the primitive is Draco-compressed, which vkray does not decode (re-export it without Draco "
+                 "compression)");
+          }
+        }
+      }
+    });
+    eachObject("accessors", [&](const nlohmann::json& a, const std::string& p) {
+      for (const char* k : {"bufferView", "byteOffset", "componentType", "count"}) {
+        member(a, k, JsonKind::Integer, p + "." + k);
+      }
+      member(a, "type", JsonKind::String, p + ".type");
+      member(a, "sparse", JsonKind::Object, p + ".sparse");
+    });
+    eachObject("bufferViews", [&](const nlohmann::json& b, const std::string& p) {
+      for (const char* k : {"buffer", "byteOffset", "byteLength", "byteStride"}) {
+        member(b, k, JsonKind::Integer, p + "." + k);
+      }
+    });
+    eachObject("buffers", [&](const nlohmann::json& b, const std::string& p) {
+      member(b, "byteLength", JsonKind::Integer, p + ".byteLength");
+      member(b, "uri", JsonKind::String, p + ".uri");
+    });
+    eachObject("materials", [&](const nlohmann::json& m, const std::string& p) {
+      member(m, "alphaMode", JsonKind::String, p + ".alphaMode");
+      if (const auto* pbr = member(m, "pbrMetallicRoughness", JsonKind::Object, p + ".pbrMetallicRoughness")) {
+        std::string pp = p + ".pbrMetallicRoughness";
+        numbers(*pbr, "baseColorFactor", pp);
+        for (const char* k : {"metallicFactor", "roughnessFactor"}) member(*pbr, k, JsonKind::Number, pp + "." + k);
+      }
+    });
+    eachObject("cameras", [&](const nlohmann::json& c, const std::string& p) {
+      member(c, "type", JsonKind::String, p + ".type");
+      member(c, "perspective", JsonKind::Object, p + ".perspective");
+    });
+  }
+
+private:
+  [[noreturn]] void fail(const std::string& path, const std::string& problem) const {
+    throw InputError(where_, path + ": " + problem);
+  }
+  void need(const nlohmann::json& v, JsonKind k, const std::string& path) const {
+    if (!isKind(v, k)) fail(path, std::string("must be ") + kindName(k) + ", got " + typeOf(v));
+  }
+  static std::string typeOf(const nlohmann::json& v) {
+    if (v.is_object()) return "an object";
+    if (v.is_array()) return "an array";
+    if (v.is_string()) return "a string";
+    if (v.is_boolean()) return "a boolean";
+    if (v.is_null()) return "null";
+    return "a number";
+  }
+  // The member if present, checked for its kind.
+  const nlohmann::json* member(const nlohmann::json& obj, const char* key, JsonKind k, const std::string& path) const {
+    auto it = obj.find(key);
+    if (it == obj.end()) return nullptr;
+    need(*it, k, path);
+    return &*it;
+  }
+  void integers(const nlohmann::json& obj, const char* key, const std::string& parent) const {
+    std::string path = parent + "." + key;
+    if (const auto* v = member(obj, key, JsonKind::Array, path)) {
+      for (std::size_t i = 0; i < v->size(); ++i)
+        need((*v)[i], JsonKind::Integer, path + "[" + std::to_string(i) + "]");
+    }
+  }
+  void numbers(const nlohmann::json& obj, const char* key, const std::string& parent) const {
+    std::string path = parent + "." + key;
+    if (const auto* v = member(obj, key, JsonKind::Array, path)) {
+      for (std::size_t i = 0; i < v->size(); ++i) need((*v)[i], JsonKind::Number, path + "[" + std::to_string(i) + "]");
+    }
+  }
+  template <class F> void eachObject(const char* list, F&& f) const {
+    const auto* v = member(doc_, list, JsonKind::Array, list);
+    if (!v) return;
+    for (std::size_t i = 0; i < v->size(); ++i) {
+      std::string path = std::string(list) + "[" + std::to_string(i) + "]";
+      need((*v)[i], JsonKind::Object, path);
+      f((*v)[i], path);
+    }
+  }
+
+  const nlohmann::json& doc_;
+  const std::string& where_;
+};
+
+// The file's JSON: the whole of a .gltf, the first chunk of a .glb (glTF 2.0 sec. 4.4). Empty when
+// a .glb is too broken to find it (tinygltf then says why).
+std::string gltfJson(const std::filesystem::path& file, bool binary) {
+  std::ifstream in(file, std::ios::binary);
+  if (!binary) return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  unsigned char header[20];
+  if (!in.read(reinterpret_cast<char*>(header), sizeof header)) return {};
+  auto u32 = [&](int at) {
+    std::uint32_t v;
+    std::memcpy(&v, header + at, sizeof v);
+    return v;
+  };
+  if (std::memcmp(header, "glTF", 4) != 0 || std::memcmp(header + 16, "JSON", 4) != 0) return {};
+  std::uint32_t length = u32(12);
+  if (length > u32(8)) return {};
+  std::string json(length, '\0');
+  if (!in.read(json.data(), length)) return {};
+  return json;
+}
+
 class GltfReader {
 public:
   GltfReader(const MeshRequest& request, const tinygltf::Model& model) : request_(request), model_(model) {}
 
   MeshData read() {
-    for (const auto& ext : model_.extensionsRequired) {
-      if (std::find(std::begin(kSupportedRequired), std::end(kSupportedRequired), ext) ==
-          std::end(kSupportedRequired)) {
-        fail("requires extension '" + ext + "', which vkray does not support");
-      }
-    }
     for (std::size_t i = 0; i < model_.materials.size(); ++i) data_.materials.push_back(mapMaterial(i));
 
     // The default scene, else the first; a file without scenes shows every root node.
@@ -143,8 +338,10 @@ private:
         fail(where + ".mesh: no mesh " + std::to_string(node.mesh));
       readMesh(static_cast<std::size_t>(node.mesh), world);
     }
-    if (request_.importCamera && node.camera >= 0 && !data_.camera) readCamera(node, world, where);
-    if (request_.importLights) readLight(node, world, where);
+    if ((request_.importCamera || request_.importPresent) && node.camera >= 0 && !data_.camera) {
+      readCamera(node, world, where);
+    }
+    if (request_.importLights || request_.importPresent) readLight(node, world, where);
     for (int child : node.children) visit(child, world, where + ".children");
   }
 
@@ -235,13 +432,14 @@ private:
     for (std::size_t p = 0; p < mesh.primitives.size(); ++p) {
       const tinygltf::Primitive& prim = mesh.primitives[p];
       const std::string where = "meshes[" + std::to_string(meshIndex) + "].primitives[" + std::to_string(p) + "]";
-      if (prim.extensions.count("KHR_draco_mesh_compression")) {
-        fail(where + " is Draco-compressed (KHR_draco_mesh_compression), which vkray does not support");
-      }
       // Points and lines are not surfaces: nothing for a ray to hit.
       if (prim.mode != TINYGLTF_MODE_TRIANGLES && prim.mode != TINYGLTF_MODE_TRIANGLE_STRIP &&
           prim.mode != TINYGLTF_MODE_TRIANGLE_FAN) {
-        if (prim.mode >= TINYGLTF_MODE_POINTS && prim.mode <= TINYGLTF_MODE_LINE_STRIP) continue;
+        if (prim.mode >= TINYGLTF_MODE_POINTS && prim.mode <= TINYGLTF_MODE_LINE_STRIP) {
+          data_.noTrianglesReason = "its primitives are points or lines only (mode " + std::to_string(prim.mode) +
+                                    "), which are not surfaces";
+          continue;
+        }
         fail(where + ".mode " + std::to_string(prim.mode) + " is not a glTF primitive mode");
       }
       auto pos = prim.attributes.find("POSITION");
@@ -327,7 +525,10 @@ private:
     }
     const tinygltf::Camera& cam = model_.cameras[static_cast<std::size_t>(node.camera)];
     const std::string name = "cameras[" + std::to_string(node.camera) + "]";
-    if (cam.type != "perspective") fail(name + " is " + cam.type + "; vkray has only perspective cameras");
+    if (cam.type != "perspective") {
+      if (!request_.importCamera) return; // a model's orthographic camera: the fitted one instead
+      fail(name + " is " + cam.type + "; vkray has only perspective cameras");
+    }
     double fov = glm::degrees(cam.perspective.yfov);
     if (!(fov > 0.0 && fov < 180.0)) fail(name + ".perspective.yfov must be in (0, pi)");
     // A glTF camera looks down its local -z with +y up.
@@ -360,6 +561,7 @@ private:
     // A spot light becomes a point light (its cone is ignored); a directional light has no
     // position and vkray has no equivalent.
     if (light.type != "point" && light.type != "spot") {
+      if (!request_.importLights) return; // a model's directional light: left out
       fail(name + " is " + light.type + "; vkray has only point lights (set import_lights to false to leave it out)");
     }
     PointLight p;
@@ -403,7 +605,6 @@ private:
     double rough = clamp01(pbr.roughnessFactor);
     double smooth = (1.0 - rough) * (1.0 - rough);
     m.color = base;
-    m.ambient = 0.1;
     m.reflection = metal * smooth;
     m.specular = smooth * (0.25 + 0.75 * metal);
     double a = std::max(rough * rough, 0.03);
@@ -417,6 +618,8 @@ private:
     if (!(m.ior >= 0.01 && m.ior <= 100.0)) m.ior = 1.5;
     m.reflection = std::min(m.reflection, 1.0 - m.transmission);
     m.diffuse = 0.8 * (1.0 - m.reflection - m.transmission);
+    // Ambient light is reflected as diffuse light is: ambient term = ambient light x diffuse x base.
+    m.ambient = m.diffuse;
     return m;
   }
 
@@ -437,6 +640,19 @@ MeshData readGltf(const MeshRequest& request) {
   std::string ext = request.file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  std::string json = gltfJson(request.file, ext == ".glb");
+  if (!json.empty()) {
+    nlohmann::json doc;
+    try {
+      doc = parseJsonText(json, request.shownAs);
+    } catch (const InputError& e) {
+      // "file:3:14: invalid JSON: ..." -> "file: not a valid glTF file: at 3:14: invalid JSON: ..."
+      std::string what = e.what();
+      if (what.rfind(request.shownAs + ":", 0) == 0) what = "at " + what.substr(request.shownAs.size() + 1);
+      throw InputError(request.shownAs, "not a valid glTF file: " + what);
+    }
+    GltfPreflight(doc, request.shownAs).check();
+  }
   bool ok = ext == ".glb" ? loader.LoadBinaryFromFile(&model, &err, &warn, request.file.string())
                           : loader.LoadASCIIFromFile(&model, &err, &warn, request.file.string());
   if (!ok) throw InputError(request.shownAs, "not a valid glTF file: " + firstLine(err.empty() ? warn : err));

@@ -86,8 +86,8 @@ Material mapMtl(const tinyobj::material_t& mtl, const std::string& file) {
   m.name = file + ": " + mtl.name;
   m.color = glm::max(dvec3(finiteOr(mtl.diffuse[0], 0.8), finiteOr(mtl.diffuse[1], 0.8), finiteOr(mtl.diffuse[2], 0.8)),
                      dvec3(0.0));
-  m.ambient = 0.1;
   m.diffuse = 1.0;
+  m.ambient = m.diffuse; // ambient light reflected as diffuse light is (docs/meshes.md)
   double ks =
       std::max({finiteOr(mtl.specular[0], 0.0), finiteOr(mtl.specular[1], 0.0), finiteOr(mtl.specular[2], 0.0)});
   m.specular = std::clamp(ks, 0.0, 1.0);
@@ -213,6 +213,11 @@ MeshData readObj(const MeshRequest& request) {
         }
       }
       offset += n;
+    }
+  }
+  for (const auto& shape : shapes) {
+    if (data.faces.empty() && (!shape.points.indices.empty() || !shape.lines.indices.empty())) {
+      data.noTrianglesReason = "the file has only points (p) or lines (l), which are not surfaces";
     }
   }
   if (request.importCamera) throw InputError(where, "OBJ files have no cameras (import_camera needs glTF)");

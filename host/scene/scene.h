@@ -165,6 +165,9 @@ struct Scene {
   // The scene file's "animation", if any; sceneAtFrame (scene/animation.h) turns it into the
   // static scene of one frame. Shared: every frame's Scene is a copy of this one.
   std::shared_ptr<const Animation> animation;
+  // camera.fit: the camera frames every bounded object, looking from this direction (model_scene.h);
+  // refitCamera() redoes it when the image's aspect changes.
+  std::optional<glm::dvec3> fitFrom;
 
   std::size_t boundedPrimitiveCount() const { return spheres.size() + polygons.size() + triangles.size(); }
   std::size_t objectCount() const { return boundedPrimitiveCount() + planes.size(); }

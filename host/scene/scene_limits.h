@@ -15,5 +15,9 @@ inline constexpr long long kMaxSpp = 4096;        // samples per pixel
 inline constexpr std::size_t kMaxPolygonVertices = 64;
 inline constexpr std::size_t kMaxPrimitives = 1u << 24;
 inline constexpr std::size_t kMaxMaterialCount = gpu::kMaxMaterials;
+// Coordinates and radii, in magnitude. The kernel squares lengths in float32 (|f|^2 - r^2 in the
+// sphere test, edge cross products in the triangle test): with every coordinate and radius within
+// 1e18, a squared distance between two points is at most 12e36, inside float32's 3.4e38.
+inline constexpr double kMaxCoordinate = 1e18;
 
 } // namespace vkray

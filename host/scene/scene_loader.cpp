@@ -10,6 +10,7 @@
 #include "scene/animation.h"
 #include "scene/json_reader.h"
 #include "scene/mesh_import.h"
+#include "scene/model_scene.h"
 #include "scene/scene_limits.h"
 #include "util/error.h"
 
@@ -27,10 +28,40 @@ struct LoadContext {
   std::string importedCameraFrom;       // that object's JSON path
 };
 
-void readCamera(const JsonNode& node, Camera& camera) {
-  node.allowKeys({"position", "look_at", "up", "fov_y"});
-  camera.position = node.at("position").vec3();
-  camera.lookAt = node.at("look_at").vec3();
+// Why a length beyond kMaxCoordinate is refused (scene_limits.h).
+std::string squaredPastFloat(double v, const char* squared) {
+  return "the kernel squares " + std::string(squared) + " in float32, and " + formatNumber(v) +
+         " squared is past float32's 3.4e+38";
+}
+
+// A position the kernel sees: every coordinate within kMaxCoordinate.
+dvec3 readPoint(const JsonNode& node) {
+  dvec3 p = node.vec3();
+  for (std::size_t i = 0; i < 3; ++i) {
+    if (std::abs(p[static_cast<int>(i)]) > kMaxCoordinate) {
+      node[i].fail("must be within +-" + formatNumber(kMaxCoordinate) + ", got " +
+                   formatNumber(p[static_cast<int>(i)]) + ": " + squaredPastFloat(p[static_cast<int>(i)], "distances"));
+    }
+  }
+  return p;
+}
+
+// A camera placed by hand, or `"fit": true` (optionally `"from"`: the direction it looks from),
+// placed after the objects are read (model_scene.h: fitCamera). Returns whether it is to be fitted.
+bool readCamera(const JsonNode& node, Camera& camera, glm::dvec3& fitFrom) {
+  node.allowKeys({"position", "look_at", "up", "fov_y", "fit", "from"});
+  bool fit = false;
+  if (auto f = node.find("fit")) fit = f->boolean();
+  if (fit) {
+    for (const char* key : {"position", "look_at"}) {
+      if (auto k = node.find(key)) k->fail("give either camera.fit or camera." + std::string(key) + ", not both");
+    }
+    if (auto from = node.find("from")) fitFrom = from->nonZeroVec3();
+  } else {
+    if (auto from = node.find("from")) from->fail("only with \"fit\": true");
+    camera.position = readPoint(node.at("position"));
+    camera.lookAt = readPoint(node.at("look_at"));
+  }
   if (auto up = node.find("up")) camera.up = up->nonZeroVec3();
   if (auto fov = node.find("fov_y")) {
     camera.fovY = fov->number();
@@ -38,9 +69,16 @@ void readCamera(const JsonNode& node, Camera& camera) {
       fov->fail("must be in (0, 180) degrees, got " + formatNumber(camera.fovY));
     }
   }
+  if (fit) {
+    if (glm::length(glm::cross(glm::normalize(fitFrom), glm::normalize(camera.up))) < 1e-9) {
+      node.fail("camera.from must not be parallel to camera.up");
+    }
+    return true;
+  }
   if (glm::length(camera.lookAt - camera.position) == 0.0) {
     node.at("look_at").fail("must differ from camera.position");
   }
+  return false;
 }
 
 void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sawAmbient) {
@@ -150,7 +188,7 @@ void readLights(const JsonNode& node, Scene& scene) {
     l.allowKeys({"type", "name", "position", "color", "shadows"});
     if (auto t = l.find("type")) t->choice({"point"});
     PointLight light;
-    light.position = l.at("position").vec3();
+    light.position = readPoint(l.at("position"));
     if (auto c = l.find("color")) light.color = c->color();
     if (auto s = l.find("shadows")) light.shadows = s->boolean();
     if (auto n = l.find("name")) {
@@ -187,7 +225,7 @@ void readPolygon(const JsonNode& obj, LoadContext& ctx) {
     verts.fail("at most " + std::to_string(kMaxPolygonVertices) + " vertices, got " + std::to_string(verts.size()));
   }
   Polygon poly;
-  for (std::size_t i = 0; i < verts.size(); ++i) poly.vertices.push_back(verts[i].vec3());
+  for (std::size_t i = 0; i < verts.size(); ++i) poly.vertices.push_back(readPoint(verts[i]));
   const auto& v = poly.vertices;
   double extent = 0.0;
   for (std::size_t i = 0; i < v.size(); ++i) {
@@ -205,11 +243,35 @@ void readPolygon(const JsonNode& obj, LoadContext& ctx) {
   dvec3 centroid(0.0);
   for (auto& p : v) centroid += p;
   centroid /= static_cast<double>(v.size());
-  for (std::size_t i = 0; i < v.size(); ++i) {
-    double d = std::abs(glm::dot(n, v[i] - centroid));
-    if (d > 1e-6 * extent) {
-      verts.fail("is not planar: vertex " + std::to_string(i) + " is " + formatNumber(d) + " off the polygon's plane");
+  bool planar = true;
+  for (std::size_t i = 0; i < v.size(); ++i) planar = planar && std::abs(glm::dot(n, v[i] - centroid)) <= 1e-6 * extent;
+  if (!planar) {
+    // Off the plane through all of them, every vertex of a twisted quad is equally far: the one to
+    // name is the vertex furthest from the plane of the others, where the others lie flattest.
+    std::size_t worst = 0;
+    double worstScore = -1.0, worstDistance = 0.0;
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      std::vector<dvec3> others;
+      for (std::size_t j = 0; j < v.size(); ++j) {
+        if (j != i) others.push_back(v[j]);
+      }
+      dvec3 on = newellNormal(others);
+      if (!(glm::length(on) > 0.0)) continue; // the others are collinear: no plane
+      on = glm::normalize(on);
+      dvec3 oc(0.0);
+      for (auto& p : others) oc += p;
+      oc /= static_cast<double>(others.size());
+      double residual = 0.0;
+      for (auto& p : others) residual = std::max(residual, std::abs(glm::dot(on, p - oc)));
+      double d = std::abs(glm::dot(on, v[i] - oc));
+      if (d - residual > worstScore) {
+        worst = i;
+        worstScore = d - residual;
+        worstDistance = d;
+      }
     }
+    verts.fail("is not planar: vertex " + std::to_string(worst) + " is " + formatNumber(worstDistance) +
+               " off the plane of the others");
   }
   // Convexity: every turn the same way round the normal, and one full turn in total (a star
   // pentagram turns the same way everywhere but twice around).
@@ -235,7 +297,7 @@ void readTriangle(const JsonNode& obj, LoadContext& ctx) {
   verts.expectArray();
   if (verts.size() != 3) verts.fail("a triangle needs exactly 3 vertices, got " + std::to_string(verts.size()));
   Triangle tri;
-  for (std::size_t i = 0; i < 3; ++i) tri.v[i] = verts[i].vec3();
+  for (std::size_t i = 0; i < 3; ++i) tri.v[i] = readPoint(verts[i]);
   dvec3 n = glm::cross(tri.v[1] - tri.v[0], tri.v[2] - tri.v[0]);
   if (glm::length(n) == 0.0) verts.fail("is degenerate (zero area)");
   if (auto normals = obj.find("normals")) {
@@ -348,8 +410,13 @@ void readObjects(const JsonNode& node, LoadContext& ctx) {
     if (type == "sphere") {
       obj.allowKeys({"type", "name", "center", "radius", "material"});
       Sphere s;
-      s.center = obj.at("center").vec3();
-      s.radius = obj.at("radius").positive();
+      s.center = readPoint(obj.at("center"));
+      JsonNode radius = obj.at("radius");
+      s.radius = radius.positive();
+      if (s.radius > kMaxCoordinate) {
+        radius.fail("must be at most " + formatNumber(kMaxCoordinate) + ", got " + formatNumber(s.radius) + ": " +
+                    squaredPastFloat(s.radius, "the radius (radius^2 in the sphere test)"));
+      }
       s.material = readObjectMaterial(obj, ctx);
       ctx.scene.spheres.push_back(s);
     } else if (type == "plane") {
@@ -359,8 +426,14 @@ void readObjects(const JsonNode& node, LoadContext& ctx) {
       double len = glm::length(n);
       p.normal = n / len;
       if (obj.find("offset") && obj.find("point")) obj.fail("give either 'offset' or 'point', not both");
-      if (auto d = obj.find("offset")) p.offset = d->number() / len;
-      if (auto pt = obj.find("point")) p.offset = -glm::dot(p.normal, pt->vec3());
+      if (auto d = obj.find("offset")) {
+        p.offset = d->number() / len;
+        if (std::abs(p.offset) > kMaxCoordinate) {
+          d->fail("puts the plane " + formatNumber(std::abs(p.offset)) + " from the origin, past " +
+                  formatNumber(kMaxCoordinate) + ": " + squaredPastFloat(p.offset, "distances"));
+        }
+      }
+      if (auto pt = obj.find("point")) p.offset = -glm::dot(p.normal, readPoint(*pt));
       p.material = readObjectMaterial(obj, ctx);
       ctx.scene.planes.push_back(p);
     } else if (type == "polygon") {
@@ -396,7 +469,8 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
   if (auto d = root.find("description")) d->string();
   // The camera may instead come from a glTF file (a mesh object with import_camera).
   auto cameraNode = root.find("camera");
-  if (cameraNode) readCamera(*cameraNode, scene.camera);
+  glm::dvec3 fitFrom = kThreeQuarterView;
+  bool fit = cameraNode && readCamera(*cameraNode, scene.camera, fitFrom);
   bool sawBackground = false;
   bool sawAmbient = false;
   if (auto img = root.find("image")) readImage(*img, scene, sawBackground, sawAmbient);
@@ -417,6 +491,12 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
     scene.camera = *ctx.importedCamera;
   } else if (!cameraNode) {
     root.at("camera"); // throws: missing required key
+  } else if (fit) {
+    double aspect = static_cast<double>(scene.render.width) / scene.render.height;
+    Camera fitted = fitCamera(sceneBounds(scene), fitFrom, scene.camera.fovY, aspect, name + ": camera.fit");
+    fitted.up = scene.camera.up;
+    scene.camera = fitted;
+    scene.fitFrom = fitFrom;
   }
   if (scene.materials.size() > kMaxMaterialCount) {
     root.at("materials")
@@ -494,7 +574,8 @@ Scene loadSceneFromString(const std::string& text, const std::string& name, cons
   return scene;
 }
 
-Scene loadScene(const std::filesystem::path& path) {
+Scene loadScene(const std::filesystem::path& path, const ModelSceneOptions& model) {
+  if (isModelFile(path)) return loadModelScene(path, model);
   Scene scene = loadSceneFromString(readSceneFile(path, path.string()), path.string(), path.parent_path());
   scene.path = path;
   return scene;

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <string>
 
+#include "scene/model_scene.h"
 #include "scene/scene.h"
 
 namespace vkray {
@@ -14,7 +15,8 @@ namespace vkray {
 // belongs in mesh files).
 inline constexpr std::uintmax_t kMaxSceneFileBytes = 64ull << 20;
 
-Scene loadScene(const std::filesystem::path& path);
+// A scene file, or a model file (.obj, .gltf, .glb: loadModelScene with `model`).
+Scene loadScene(const std::filesystem::path& path, const ModelSceneOptions& model = {});
 
 // `name` stands for the file in messages; relative mesh paths resolve against `baseDir`.
 Scene loadSceneFromString(const std::string& text, const std::string& name, const std::filesystem::path& baseDir = ".");

@@ -9,7 +9,8 @@
 
 namespace vkray {
 
-SceneWatcher::SceneWatcher(std::filesystem::path path) : path_(std::move(path)), scene_(loadScene(path_)) {
+SceneWatcher::SceneWatcher(std::filesystem::path path, ModelSceneOptions model)
+    : path_(std::move(path)), model_(std::move(model)), scene_(loadScene(path_, model_)) {
   watchFilesOf(scene_);
   stamps_ = currentStamps();
   lastCheck_ = std::chrono::steady_clock::now();
@@ -17,6 +18,7 @@ SceneWatcher::SceneWatcher(std::filesystem::path path) : path_(std::move(path)),
 
 void SceneWatcher::watchFilesOf(const Scene& scene) {
   files_.assign(1, path_);
+  if (isModelFile(path_)) return; // the model is the scene file itself
   for (const auto& mesh : scene.meshes) {
     std::filesystem::path file(mesh.file);
     if (file.is_relative()) file = path_.parent_path() / file;
@@ -42,7 +44,7 @@ bool SceneWatcher::poll(std::chrono::milliseconds interval) {
   if (stamps == stamps_) return false;
   stamps_ = stamps;
   try {
-    Scene next = loadScene(path_);
+    Scene next = loadScene(path_, model_);
     scene_ = std::move(next);
     error_.clear();
     // The reloaded scene may name other meshes: watch those from now on.

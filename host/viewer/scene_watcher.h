@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "scene/model_scene.h"
 #include "scene/scene.h"
 
 namespace vkray {
@@ -15,7 +16,7 @@ namespace vkray {
 class SceneWatcher {
 public:
   // Loads the scene now; a broken file here is an error for the caller (there is no last good scene).
-  explicit SceneWatcher(std::filesystem::path path);
+  explicit SceneWatcher(std::filesystem::path path, ModelSceneOptions model = {});
 
   const Scene& scene() const { return scene_; }
   // The last reload's error, empty after a successful load.
@@ -32,6 +33,7 @@ private:
   std::vector<Stamp> currentStamps() const;
 
   std::filesystem::path path_;
+  ModelSceneOptions model_;
   Scene scene_;
   std::string error_;
   std::vector<std::filesystem::path> files_; // the scene file first, then its meshes

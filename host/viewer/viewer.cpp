@@ -683,7 +683,7 @@ int runViewer(const ViewerOptions& o) {
     checkOutputPath(o.windowScreenshot);
   }
   // The scene loads before any window opens: a broken file stops here with its one-line error.
-  SceneWatcher watcher(o.scene);
+  SceneWatcher watcher(o.scene, o.model);
   GlfwSession glfw;
   Scene scene = watcher.scene();
   if (o.applyOverrides) o.applyOverrides(scene.render);

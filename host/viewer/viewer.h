@@ -10,6 +10,7 @@
 #include <string>
 
 #include "render/renderer.h"
+#include "scene/model_scene.h"
 #include "scene/scene.h"
 #include "vk/device_flags.h"
 
@@ -43,6 +44,7 @@ struct ViewerSummary {
 
 struct ViewerOptions {
   std::filesystem::path scene;
+  ModelSceneOptions model; // when `scene` is a model file (--floor, --background)
   // Command-line overrides of the scene's settings, re-applied after every reload.
   std::function<void(RenderSettings&)> applyOverrides;
   std::optional<int> samplesPerFrame; // --spp; default 1 (the scene's spp is a headless setting)

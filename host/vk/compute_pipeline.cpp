@@ -65,6 +65,17 @@ PipelineCache::~PipelineCache() {
   save();
 }
 
+std::size_t PipelineCache::keptBytes() const {
+  constexpr std::size_t kHeaderBytes = 32;
+  std::size_t size = 0;
+  try {
+    size = cache_.getData().size();
+  } catch (const vk::SystemError&) {
+    return 0;
+  }
+  return size > kHeaderBytes ? size - kHeaderBytes : 0;
+}
+
 void PipelineCache::save() const {
   if (file_.empty() || !*cache_) return;
   try {

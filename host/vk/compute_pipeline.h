@@ -54,6 +54,9 @@ public:
   bool loadedFromDisk() const { return loadedBytes_ > 0; }
   std::size_t loadedBytes() const { return loadedBytes_; }
   const std::filesystem::path& file() const { return file_; }
+  // What the driver keeps of compiled pipelines: the cache's data past its 32-byte header
+  // (VkPipelineCacheHeaderVersionOne). 0 means it recompiles every run (Mesa 22's lavapipe).
+  std::size_t keptBytes() const;
   // Writes the cache now (atomically); also done on destruction. Failures are ignored: a cache
   // that cannot be saved only costs the next run a compile.
   void save() const;
