@@ -50,7 +50,7 @@ float boxDistance2(vec3 bmin, vec3 bmax) {
 
 void main() {
   gDynamicZero = stats.zero;
-  loadSceneRegisters(); // before any branch (scene.glsl)
+  loadSceneRegisters(); // before any branch (scene_access.glsl)
   uint tilesX = (frame.imageSize.x + kEntryTileSize - 1u) / kEntryTileSize;
   uint tileRows = (pc.tileSize.y + kEntryTileSize - 1u) / kEntryTileSize;
   uint tile = gl_GlobalInvocationID.x;
@@ -103,7 +103,7 @@ void main() {
   int top = 0;
   uint root = opaqueUniform(frame.bvhRoot);
   if (root != kBvhNoRef) pending[top++] = root;
-  // Invariant: count + top <= kEntryPointsMax. The loop is tested at the bottom (scene.glsl).
+  // Invariant: count + top <= kEntryPointsMax. The loop is tested at the bottom (bvh.glsl).
   if (top > 0) {
     while (true) {
       uint ref = pending[--top];

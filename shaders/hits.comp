@@ -4,7 +4,7 @@
 // SHADOWS on, a lit hit also sends a shadow ray to light 0, spawned off the surface as the renderer
 // does, and asks only whether anything is in the way (any-hit).
 //
-// It uses the renderer's pipeline layout and bands (host/render/renderer.cpp). Each pixel gets
+// It uses the renderer's pipeline layout and bands (host/render/renderer.cpp, band_loop.cpp). Each pixel gets
 // vec4(t or -1, hit kind, primitive index, shadow): -1 no shadow ray, 0 lit, 1 occluded.
 #version 460
 #extension GL_GOOGLE_include_directive : require
@@ -22,8 +22,8 @@ layout(push_constant) uniform Push { PushConstants pc; };
 
 void main() {
   gDynamicZero = stats.zero;
-  loadSceneRegisters(); // before any branch (scene.glsl)
-  uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (scene.glsl)
+  loadSceneRegisters(); // before any branch (scene_access.glsl)
+  uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (camera.glsl)
   uvec2 pixel = pc.tileOrigin + local;
   if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize))) return;
   loadEntryPoints(pixel, pc.imageRow0);

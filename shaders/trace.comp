@@ -249,8 +249,8 @@ void flushStats() {
 
 void main() {
   gDynamicZero = stats.zero;
-  loadSceneRegisters(); // before any branch (scene.glsl)
-  uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (scene.glsl)
+  loadSceneRegisters(); // before any branch (scene_access.glsl)
+  uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (camera.glsl)
   uvec2 pixel = pc.tileOrigin + local;
   // The dispatch is rounded up to whole workgroups: invocations past the tile or image do nothing,
   // but still take part in flushStats' subgroup sums.

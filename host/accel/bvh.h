@@ -1,6 +1,6 @@
 // Bounding volume hierarchy over the bounded primitives (spheres, triangles, polygons): built on
 // the host with a binned surface-area heuristic (Wald 2007, "On fast Construction of SAH-based
-// Bounding Volume Hierarchies"), flattened depth first for the shader (shaders/lib/scene.glsl).
+// Bounding Volume Hierarchies"), flattened depth first for the shader (shaders/lib/bvh.glsl).
 #pragma once
 
 #include <cstdint>

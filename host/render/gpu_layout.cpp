@@ -30,7 +30,7 @@ static_assert(sizeof(SceneUbo) <= 65536, "the packed scene must fit the smallest
 static_assert(sizeof(PushConstants) == 48 && offsetof(PushConstants, pass) == 16 &&
               offsetof(PushConstants, imageRow0) == 32);
 static_assert(sizeof(PushConstants) <= 128, "Vulkan guarantees 128 bytes of push constants");
-// invocationPixel() (shaders/lib/scene.glsl) deals each row of 8 invocations a 4 x 2 pixel block.
+// invocationPixel() (shaders/lib/camera.glsl) deals each row of 8 invocations a 4 x 2 pixel block.
 static_assert(kWorkgroupSizeX == 8 && kWorkgroupSizeY % 2 == 0, "invocationPixel assumes 8-wide, even-high groups");
 
 } // namespace vkray::gpu

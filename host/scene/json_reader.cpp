@@ -91,26 +91,41 @@ constexpr int kMaxJsonDepth = 64;
 
 // Where the nesting first goes deeper than kMaxJsonDepth: the byte offset (text.size() if it never
 // does), skipping strings and comments.
+// Steps over JSON that is not code: a string (tracked through inString across calls) or a comment
+// starting at i, leaving i on its last character. True when text[i] is code.
+bool atCode(const std::string& text, std::size_t& i, bool& inString) {
+  char c = text[i];
+  if (inString) {
+    if (c == '\\')
+      ++i;
+    else if (c == '"')
+      inString = false;
+    return false;
+  }
+  if (c == '"') {
+    inString = true;
+    return false;
+  }
+  if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
+    i = std::min(text.find('\n', i), text.size());
+    return false;
+  }
+  if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
+    auto end = text.find("*/", i + 2);
+    i = end == std::string::npos ? text.size() : end + 1;
+    return false;
+  }
+  return true;
+}
+
 std::size_t tooDeepAt(const std::string& text) {
   int depth = 0;
   bool inString = false;
   for (std::size_t i = 0; i < text.size(); ++i) {
-    char c = text[i];
-    if (inString) {
-      if (c == '\\')
-        ++i;
-      else if (c == '"')
-        inString = false;
-    } else if (c == '"') {
-      inString = true;
-    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
-      i = std::min(text.find('\n', i), text.size());
-    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
-      auto end = text.find("*/", i + 2);
-      i = end == std::string::npos ? text.size() : end + 1;
-    } else if (c == '[' || c == '{') {
+    if (!atCode(text, i, inString)) continue;
+    if (text[i] == '[' || text[i] == '{') {
       if (++depth > kMaxJsonDepth) return i;
-    } else if (c == ']' || c == '}') {
+    } else if (text[i] == ']' || text[i] == '}') {
       --depth;
     }
   }
@@ -131,21 +146,9 @@ std::size_t findToken(const std::string& text, const std::string& token) {
   };
   bool inString = false;
   for (std::size_t i = 0; i < text.size(); ++i) {
-    char c = text[i];
-    if (inString) {
-      if (c == '\\')
-        ++i;
-      else if (c == '"')
-        inString = false;
-    } else if (c == '"') {
-      inString = true;
-    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '/') {
-      i = std::min(text.find('\n', i), text.size());
-    } else if (c == '/' && i + 1 < text.size() && text[i + 1] == '*') {
-      auto end = text.find("*/", i + 2);
-      i = end == std::string::npos ? text.size() : end + 1;
-    } else if (text.compare(i, token.size(), token) == 0 && (i == 0 || !partOfNumber(text[i - 1])) &&
-               (i + token.size() >= text.size() || !partOfNumber(text[i + token.size()]))) {
+    if (!atCode(text, i, inString)) continue;
+    if (text.compare(i, token.size(), token) == 0 && (i == 0 || !partOfNumber(text[i - 1])) &&
+        (i + token.size() >= text.size() || !partOfNumber(text[i + token.size()]))) {
       return i;
     }
   }

@@ -228,7 +228,7 @@ float intersectPolygonRobust(Ray ray, WatertightRay w, vec3 n, uint first, uint 
   vec2 prev = start;
   bool anyNeg = false;
   bool anyPos = false;
-  // Vertex loops are tested at the bottom (scene.glsl, traverseBvh: a loop tested at the top runs
+  // Vertex loops are tested at the bottom (bvh.glsl, traverseBvh: a loop tested at the top runs
   // one more whole turn, masked off, on CPU drivers).
   uint i = 1u;
   while (count > 1u) {

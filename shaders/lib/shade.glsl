@@ -34,7 +34,7 @@ uvec2 mediaSetSlot(uvec2 m, uint i, uint id) {
 
 // The media helpers run a fixed number of turns with selects: on CPU drivers a loop whose trip count
 // the compiler cannot see (an early return, a data-dependent bound) stays a loop, and a loop costs
-// one more whole turn, masked off, than its lanes need (traverseBvh in scene.glsl).
+// one more whole turn, masked off, than its lanes need (traverseBvh in bvh.glsl).
 
 // The innermost medium, or kNoMedium outside everything.
 uint mediaTop(uvec2 m) {
@@ -99,7 +99,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   vec3 toLight = lightPos - origin;
   float dist = length(toLight);
   vec3 dir = toLight / dist;
-  // SHADOW_MODE is attenuated only when some material transmits (host/render/renderer.cpp), and
+  // SHADOW_MODE is attenuated only when some material transmits (host/render/kernel_variants.cpp), and
   // independently of max_depth: glass casts a light shadow even when no refracted ray is traced.
   if (SHADOW_MODE == kShadowsOpaque) {
     // An origin at the light (dist 0) is lit; its NaN direction meets nothing. Selects, not an
@@ -114,7 +114,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   float travelled = 0.0; // along the shadow ray from the first origin
   float enteredAt = 0.0;
   int crossing = 0;
-  while (true) { // tested at the bottom (see traverseBvh in scene.glsl)
+  while (true) { // tested at the bottom (see traverseBvh in bvh.glsl)
     if (COUNT_STATS) gCount.shadowRays++;
     TraceRay r = makeTraceRay(o, dir);
     float remaining = length(lightPos - o);

@@ -93,7 +93,7 @@ VKRAY_CONST(uint, kSpecOccluderPlaneCount, 22u); // planes that can cast a shado
 VKRAY_CONST(uint, kSpecRefinePass, 23u);
 // Materials, lights and planes read from the uniform block even when the primitives are not.
 VKRAY_CONST(uint, kSpecShadingInUbo, 24u);
-// Materials up to kMaxUnrolledCount are read into registers (scene.glsl, loadSceneRegisters).
+// Materials up to kMaxUnrolledCount are read into registers (scene_access.glsl, loadSceneRegisters).
 VKRAY_CONST(uint, kSpecMaterialCount, 25u);
 // Eye rays start their BVH walk at their tile's entry points (shaders/entry.comp) instead of the root.
 VKRAY_CONST(uint, kSpecEntryPoints, 26u);
