@@ -1,5 +1,5 @@
 // Mesh data -> scene triangles: transform, material mapping, normal handling, degenerate removal.
-// The format readers are in mesh_import_obj.cpp and mesh_import_gltf.cpp.
+// The format readers are in mesh_import_obj.cpp, mesh_import_gltf.cpp and mesh_import_ply.cpp.
 #include "scene/mesh_import.h"
 
 #include <algorithm>
@@ -216,8 +216,10 @@ std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene) {
     data = readObj(request);
   } else if (ext == ".gltf" || ext == ".glb") {
     data = readGltf(request);
+  } else if (ext == ".ply") {
+    data = readPly(request);
   } else {
-    throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf and .glb)");
+    throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf, .glb and .ply)");
   }
   return appendMesh(data, request, scene);
 }

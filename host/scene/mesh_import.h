@@ -1,6 +1,7 @@
-// Triangle meshes from files: Wavefront OBJ (+MTL) through tinyobjloader and glTF 2.0 (.gltf/.glb)
-// through tinygltf, validated, transformed and appended to a Scene. docs/scene-format.md ("Meshes")
-// documents the format, the material mapping and every repair.
+// Triangle meshes from files: Wavefront OBJ (+MTL) through tinyobjloader, glTF 2.0 (.gltf/.glb)
+// through tinygltf and PLY through our own reader, validated, transformed and appended to a Scene.
+// docs/scene-format.md ("Meshes") and docs/meshes.md document the formats, the material mapping
+// and every repair.
 #pragma once
 
 #include <array>
@@ -29,6 +30,10 @@ struct MeshData {
   std::vector<Material> materials;                       // named "file: material"
   std::optional<Camera> camera;                          // the first camera, when asked for
   std::vector<PointLight> lights;                        // when asked for
+  // Per position, empty when the file has none (PLY only so far); carried for the renderer's
+  // textures and vertex colours to come, unused by appendMesh.
+  std::vector<glm::vec2> texcoords;    // u, v as the file gives them
+  std::vector<glm::vec3> vertexColors; // linear RGB, decoded from the file's sRGB-encoded values
 };
 
 enum class MeshNormals {
@@ -55,8 +60,9 @@ struct MeshRequest {
 // Readers: the file into MeshData (file frame), or InputError naming the file and the problem.
 MeshData readObj(const MeshRequest& request);
 MeshData readGltf(const MeshRequest& request);
+MeshData readPly(const MeshRequest& request); // ASCII and binary PLY (docs/meshes.md, "PLY")
 
-// Reads the file (by extension: .obj, .gltf, .glb), transforms it and appends its triangles,
+// Reads the file (by extension: .obj, .gltf, .glb, .ply), transforms it and appends its triangles,
 // materials, camera and lights to the scene; records a MeshInfo. Degenerate triangles (zero area
 // after the transform, in double) are dropped and counted. Returns the imported camera, if any.
 std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene);
