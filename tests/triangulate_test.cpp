@@ -233,6 +233,24 @@ TEST(Triangulate, CombAndSpiral) {
   expectValidTriangulation(spiral, tris);
 }
 
+// A star-shaped face of 20 000 random radii (about half its corners reflex) is clipped in full, not
+// left to the fallback: n - 2 triangles, all wound as the face, adding up to its area.
+TEST(Triangulate, LargeConcavePolygonsAreClippedInFull) {
+  std::mt19937 rng(5);
+  std::vector<dvec2> p = randomStar(rng, 20000);
+  std::vector<Corners> tris = triangulate(p, randomFrame(rng));
+  ASSERT_EQ(tris.size(), p.size() - 2);
+  double sum = 0.0;
+  int wrong = 0;
+  for (const Corners& t : tris) {
+    double a = triangleArea2(p, t);
+    wrong += !(a > 0.0);
+    sum += a;
+  }
+  EXPECT_EQ(wrong, 0);
+  EXPECT_NEAR(sum, shoelace(p), 1e-9 * shoelace(p));
+}
+
 // ---- Rings -----------------------------------------------------------------------------------------
 
 // A ring as one polygon: the outline, a slit in to the hole, the hole the other way round, and the

@@ -31,9 +31,10 @@ bool turnsLeft(const dvec2& a, const dvec2& b, const dvec2& c) {
   return cross(ab, bc) > 1e-14 * (glm::dot(ab, ab) + glm::dot(bc, bc));
 }
 
-// Point-in-triangle tests one ear clipping may spend before it gives up on the rest of a polygon
-// (a few tenths of a second): only self-intersecting or huge concave inputs get near it.
-constexpr std::size_t kWorkBudget = 100'000'000;
+// Ear tests and point-in-triangle tests one ear clipping may spend before it gives up on the rest
+// of a polygon (a tenth of a second; a second under the sanitizers): only self-intersecting inputs
+// get near it.
+constexpr std::size_t kWorkBudget = 20'000'000;
 
 class EarClipper {
 public:
@@ -45,6 +46,20 @@ public:
       prev_[i] = (i + m - 1) % m;
       next_[i] = (i + 1) % m;
     }
+    // The corners that are not convex go in a uniform grid of about one per cell over the polygon's
+    // bounds, so an ear test looks only at those near its triangle.
+    std::size_t reflex = 0;
+    lo_ = hi_ = p[0];
+    for (std::size_t i = 0; i < m; ++i) {
+      convex_[i] = turnsLeft(p_[prev_[i]], p_[i], p_[next_[i]]);
+      reflex += !convex_[i];
+      lo_ = glm::min(lo_, p[i]);
+      hi_ = glm::max(hi_, p[i]);
+    }
+    side_ = std::clamp<std::size_t>(static_cast<std::size_t>(std::sqrt(static_cast<double>(reflex))), 1, 1024);
+    dvec2 extent = hi_ - lo_;
+    scale_ = dvec2(extent.x > 0 ? side_ / extent.x : 0.0, extent.y > 0 ? side_ / extent.y : 0.0);
+    cells_.resize(side_ * side_);
     for (std::size_t i = 0; i < m; ++i) classify(i);
   }
 
@@ -98,12 +113,18 @@ private:
 
   void classify(std::size_t i) {
     convex_[i] = turnsLeft(p_[prev_[i]], p_[i], p_[next_[i]]);
-    // Only corners that are not convex can lie inside an ear; they are kept in a list (entries go
+    // Only corners that are not convex can lie inside an ear; they are kept in the grid (entries go
     // stale as corners are removed or turn convex, and are skipped).
     if (!convex_[i] && !listed_[i]) {
       listed_[i] = true;
-      reflex_.push_back(i);
+      cells_[cellY(p_[i].y) * side_ + cellX(p_[i].x)].push_back(i);
     }
+  }
+
+  std::size_t cellX(double x) const { return cell((x - lo_.x) * scale_.x); }
+  std::size_t cellY(double y) const { return cell((y - lo_.y) * scale_.y); }
+  std::size_t cell(double t) const {
+    return t >= static_cast<double>(side_) ? side_ - 1 : t > 0.0 ? static_cast<std::size_t>(t) : 0;
   }
 
   // A corner where the outline runs out and straight back (a zero-width spike) encloses nothing,
@@ -137,14 +158,22 @@ private:
     std::size_t a = prev_[b];
     std::size_t c = next_[b];
     const dvec2 &pa = p_[a], &pb = p_[b], &pc = p_[c];
-    work_ += reflex_.size();
-    for (std::size_t r : reflex_) {
-      if (r == a || r == c || removed(r) || convex_[r]) continue;
-      const dvec2& q = p_[r];
-      // A corner repeated elsewhere (the two sides of a slit joining a hole to the outline) is not
-      // in the way; anything else on or inside the triangle is.
-      if (q == pa || q == pb || q == pc) continue;
-      if (area2(pa, pb, q) >= 0.0 && area2(pb, pc, q) >= 0.0 && area2(pc, pa, q) >= 0.0) return false;
+    const dvec2 lo = glm::min(pa, glm::min(pb, pc));
+    const dvec2 hi = glm::max(pa, glm::max(pb, pc));
+    ++work_;
+    for (std::size_t y = cellY(lo.y), y1 = cellY(hi.y); y <= y1; ++y) {
+      for (std::size_t x = cellX(lo.x), x1 = cellX(hi.x); x <= x1; ++x) {
+        const std::vector<std::size_t>& in = cells_[y * side_ + x];
+        work_ += in.size();
+        for (std::size_t r : in) {
+          if (r == a || r == c || removed(r) || convex_[r]) continue;
+          const dvec2& q = p_[r];
+          // A corner repeated elsewhere (the two sides of a slit joining a hole to the outline) is
+          // not in the way; anything else on or inside the triangle is.
+          if (q == pa || q == pb || q == pc) continue;
+          if (area2(pa, pb, q) >= 0.0 && area2(pb, pc, q) >= 0.0 && area2(pc, pa, q) >= 0.0) return false;
+        }
+      }
     }
     return true;
   }
@@ -175,7 +204,9 @@ private:
   std::vector<Corners>& out_;
   std::vector<std::size_t> prev_, next_;
   std::vector<bool> convex_, listed_;
-  std::vector<std::size_t> reflex_;
+  dvec2 lo_, hi_, scale_; // the grid: bounds, cells per unit
+  std::size_t side_ = 1;  // cells along each axis
+  std::vector<std::vector<std::size_t>> cells_;
   std::size_t work_ = 0;
 };
 
