@@ -393,6 +393,9 @@ const MalformedMesh kMalformedMeshes[] = {
     {"gltf-bad-mode.gltf", ".mode 42 is not a glTF primitive mode"},
     {"gltf-garbage.gltf", "not a valid glTF file"},
     {"glb-truncated.glb", "not a valid glTF file"},
+    {"ply-truncated-binary.ply", "face 0 (byte 218): the file ends inside it (truncated?)"},
+    {"ply-absurd-count.ply", "element 'vertex' declares 4000000000 entries, more than the file's 215 bytes can hold"},
+    {"ply-bad-list-count.ply", "line 13: face 0: vertex_indices: the list's length is negative (-3)"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Corpus, HardeningMesh, ::testing::ValuesIn(kMalformedMeshes),
@@ -408,7 +411,7 @@ INSTANTIATE_TEST_SUITE_P(Corpus, HardeningMesh, ::testing::ValuesIn(kMalformedMe
 TEST(HardeningMeshCorpus, EveryFileHasAnExpectation) {
   for (const auto& entry : fs::directory_iterator(kMalformedDir)) {
     std::string ext = entry.path().extension().string();
-    if (ext != ".obj" && ext != ".gltf" && ext != ".glb") continue;
+    if (ext != ".obj" && ext != ".gltf" && ext != ".glb" && ext != ".ply") continue;
     std::string name = entry.path().filename().string();
     bool listed = std::any_of(std::begin(kMalformedMeshes), std::end(kMalformedMeshes),
                               [&](const MalformedMesh& m) { return name == m.file; });
@@ -438,6 +441,13 @@ TEST(HardeningFuzz, FindingsStayFixed) {
         Scene scene = loadSceneFromString(bytes, "fuzz.json", VKRAY_SOURCE_DIR "/scenes");
         Features f = analyzeScene(scene, scene.render);
         packScene(scene, scene.camera.position, f.useBvh);
+      } else if (target == "ply") {
+        MeshRequest request;
+        request.file = scratch / "fuzz.ply";
+        std::ofstream(request.file, std::ios::binary) << bytes;
+        request.shownAs = "fuzz.ply";
+        Scene scene;
+        importMesh(request, scene);
       } else {
         // obj and gltf inputs: the file, then optionally "#---companion---" and its MTL or .bin.
         const std::string marker = "\n#---companion---\n";

@@ -1,5 +1,5 @@
 // Mesh import (host/scene/mesh_import*.cpp) on the fixtures in tests/data/meshes (written by
-// make_fixtures.py): known OBJ and glTF files give the known triangle counts, bounds, materials,
+// make_fixtures.py): known OBJ, glTF and PLY files give the known triangle counts, bounds, materials,
 // normals, camera and lights (MeshImport); each class of broken file is refused with a message that
 // names the file and the problem (MeshImportBroken). On the GPU (RenderMesh): a closed mesh read
 // from a file and seen from inside through the BVH shows no background, and the bundled mesh scene
@@ -164,6 +164,24 @@ TEST(MeshImport, PolygonsBecomeFansAndDegenerateTrianglesAreDroppedAndCounted) {
   expectNear(scene.triangles[3].v[0], {0, 0, 1});
 }
 
+// box-ascii.ply and box-binary.ply (big endian, with an element vkray skips) hold box.obj's box:
+// the same triangles, in the same order, all of one (the default) material.
+TEST(MeshImport, PlyBoxesAreTheObjBox) {
+  json objBox = meshObject("box.obj");
+  objBox["material"] = "gold";
+  Scene obj = loadMeshScene(objBox);
+  for (const char* file : {"box-ascii.ply", "box-binary.ply"}) {
+    SCOPED_TRACE(file);
+    Scene ply = loadMeshScene(meshObject(file));
+    ASSERT_EQ(ply.triangles.size(), obj.triangles.size());
+    for (std::size_t t = 0; t < ply.triangles.size(); ++t) {
+      for (int k = 0; k < 3; ++k) EXPECT_EQ(ply.triangles[t].v[k], obj.triangles[t].v[k]);
+      EXPECT_FALSE(ply.triangles[t].normals);
+      EXPECT_EQ(ply.triangles[t].material, ply.triangles[0].material);
+    }
+  }
+}
+
 // smooth.obj has vertex normals: they become shading normals, transformed by the inverse transpose
 // and turned to the geometric normal's side; "flat" ignores them; "smooth" computes them.
 TEST(MeshImport, VertexNormalsGiveSmoothShading) {
@@ -312,7 +330,8 @@ const BrokenMesh kBrokenMeshes[] = {
     {"gltf-short-positions.gltf", "", "component type SHORT"},
     {"gltf-orthographic-camera.gltf", "import_camera", "orthographic; vkray has only perspective cameras"},
     {"gltf-directional-light.gltf", "import_lights", "directional; vkray has only point lights"},
-    {"mesh.ply", "", "unknown mesh format '.ply'"},
+    {"ply-point-cloud.ply", "", "has no faces (a point cloud); vkray renders surfaces"},
+    {"ply-index-out-of-range.ply", "", "line 13: face 0: vertex index 5 is out of range (the file has 3 vertices)"},
 };
 
 INSTANTIATE_TEST_SUITE_P(Fixtures, MeshImportBroken, ::testing::ValuesIn(kBrokenMeshes),

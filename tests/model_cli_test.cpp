@@ -90,6 +90,33 @@ TEST_F(CliModel, BundledFixturesRenderDirectlyAndTheFloorFillsTheBottom) {
   EXPECT_GT(floored, bare + 0.1);
 }
 
+// A model opened on its own has no scene file to give it a material: a usemtl its library lacks
+// renders grey with one warning; the same file as a scene's mesh is refused, naming the fix.
+TEST_F(CliModel, AMissingMaterialIsGreyForAModelAndAnErrorInAScene) {
+  fs::path obj = dir_ / "quad.obj";
+  std::ofstream(obj) << "v -1 -1 0\nv 1 -1 0\nv 1 1 0\nv -1 1 0\nusemtl Missing\nf 1 2 3 4\n";
+  fs::path out = dir_ / "out.png";
+  Outcome r = vkray("render '" + obj.string() + "' -o '" + out.string() + "' --width 32 --height 24 -q");
+  EXPECT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_NE(r.err.find("vkray: warning: " + obj.string() +
+                       ": usemtl 'Missing' is not in the material library; those faces get the default grey"),
+            std::string::npos)
+      << r.err;
+  EXPECT_TRUE(fs::exists(out));
+
+  fs::path scene = dir_ / "scene.json";
+  std::ofstream(scene) << R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] },
+                              "objects": [ { "type": "mesh", "file": "quad.obj" } ] })";
+  fs::path out2 = dir_ / "out2.png";
+  r = vkray("render '" + scene.string() + "' -o '" + out2.string() + "' -q");
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_NE(r.err.find("usemtl 'Missing' is not in the material library (give the mesh a 'material'"),
+            std::string::npos)
+      << r.err;
+  EXPECT_FALSE(fs::exists(out2));
+}
+
 TEST_F(CliModel, RefusedModelIsOneLineAndWritesNothing) {
   fs::path bad = dir_ / "points.obj";
   std::ofstream(bad) << "v 0 0 0\nv 1 0 0\nv 0 1 0\np 1 2 3\n";

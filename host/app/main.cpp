@@ -64,7 +64,7 @@ int main(int argc, char** argv) {
 
   RenderArgs render;
   auto* renderCmd = app.add_subcommand("render", "render a scene to an image file (.png or .pfm)");
-  renderCmd->add_option("scene", render.scene, "scene file (JSON) or model file (.obj, .gltf, .glb)")->required();
+  renderCmd->add_option("scene", render.scene, "scene file (JSON) or model file (.obj, .gltf, .glb, .ply)")->required();
   renderCmd->add_option("-o,--output", render.output, "output image: .png (sRGB 8-bit) or .pfm (linear float)")
       ->required();
   renderCmd->add_flag("--stats", render.stats, "print timings, ray counts and rays per second as 'name: value' lines");

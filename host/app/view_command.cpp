@@ -11,7 +11,8 @@ namespace vkray {
 
 CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   auto* cmd = app.add_subcommand("view", "open a window on a scene: fly around, change settings live");
-  cmd->add_option("scene", a.scene, "scene file (JSON) or model file (.obj, .gltf, .glb); reloaded when it changes")
+  cmd->add_option("scene", a.scene,
+                  "scene file (JSON) or model file (.obj, .gltf, .glb, .ply); reloaded when it changes")
       ->required();
   cmd->add_option("--frames", a.frames, "scripted: trace this many frames, save --screenshot, exit")
       ->check(CLI::Range(1u, 1u << 20));

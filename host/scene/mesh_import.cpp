@@ -1,9 +1,10 @@
 // Mesh data -> scene triangles: transform, material mapping, normal handling, degenerate removal.
-// The format readers are in mesh_import_obj.cpp and mesh_import_gltf.cpp.
+// The format readers are in mesh_import_obj.cpp, mesh_import_gltf.cpp and mesh_import_ply.cpp.
 #include "scene/mesh_import.h"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <limits>
 #include <string_view>
@@ -252,6 +253,9 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
     throw InputError(where, "no triangles: " + reason + "; nothing a ray can hit");
   }
   scene.meshes.push_back(info);
+  for (const std::string& warning : data.warnings) {
+    std::fprintf(stderr, "vkray: warning: %s: %s\n", where.c_str(), warning.c_str());
+  }
 
   for (std::size_t i = 0; i < data.lights.size(); ++i) {
     PointLight light = data.lights[i];
@@ -292,6 +296,7 @@ MeshReader meshReaderFor(const std::filesystem::path& file) {
   std::string ext = lowerExtension(file);
   if (ext == ".obj") return readObj;
   if (ext == ".gltf" || ext == ".glb") return readGltf;
+  if (ext == ".ply") return readPly;
   return nullptr;
 }
 
@@ -309,7 +314,8 @@ std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene) {
     }
   }
   MeshReader read = meshReaderFor(request.file);
-  if (!read) throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf and .glb)");
+  if (!read)
+    throw InputError(request.shownAs, "unknown mesh format '" + ext + "' (vkray reads .obj, .gltf, .glb and .ply)");
   return appendMesh(read(request), request, scene);
 }
 

@@ -1,6 +1,7 @@
-// Triangle meshes from files: Wavefront OBJ (+MTL) through tinyobjloader and glTF 2.0 (.gltf/.glb)
-// through tinygltf, validated, transformed and appended to a Scene. docs/scene-format.md ("Meshes")
-// documents the format, the material mapping and every repair.
+// Triangle meshes from files: Wavefront OBJ (+MTL) through tinyobjloader, glTF 2.0 (.gltf/.glb)
+// through tinygltf and PLY through our own reader, validated, transformed and appended to a Scene.
+// docs/scene-format.md ("Meshes") and docs/meshes.md document the formats, the material mapping
+// and every repair.
 #pragma once
 
 #include <array>
@@ -30,6 +31,13 @@ struct MeshData {
   std::optional<Camera> camera;                          // the first camera, when asked for
   std::vector<PointLight> lights;                        // when asked for
   std::string noTrianglesReason; // the reader's word on why the file has no faces ("points only")
+  // What the reader repaired and the user should hear of; printed once the mesh is accepted, so a
+  // file that is refused says only why.
+  std::vector<std::string> warnings;
+  // Per position, empty when the file has none (PLY only so far); carried for the renderer's
+  // textures and vertex colours to come, unused by appendMesh.
+  std::vector<glm::vec2> texcoords;    // u, v as the file gives them
+  std::vector<glm::vec3> vertexColors; // linear RGB, decoded from the file's sRGB-encoded values
 };
 
 enum class MeshNormals {
@@ -50,6 +58,10 @@ struct MeshRequest {
   // A model opened as a scene: its first perspective camera and its point and spot lights when it
   // has any; none, or kinds vkray lacks, are left out without an error.
   bool importPresent = false;
+  // A model opened as a scene, where no scene file can give the mesh a material: an OBJ material
+  // library or name that is missing gives its faces the default grey, with a warning on stderr,
+  // instead of refusing the file.
+  bool defaultMissingMaterials = false;
   double lightScale = 1.0; // imported light colours are multiplied by this
   // The scene material of faces the file gives none (called once, when first needed). Unset:
   // appendMesh adds a default grey material itself.
@@ -59,14 +71,16 @@ struct MeshRequest {
 // Readers: the file into MeshData (file frame), or InputError naming the file and the problem.
 MeshData readObj(const MeshRequest& request);
 MeshData readGltf(const MeshRequest& request);
+MeshData readPly(const MeshRequest& request); // ASCII and binary PLY (docs/meshes.md, "PLY")
 
-// The reader for a file, by extension (any case): readObj for .obj, readGltf for .gltf and .glb;
+// The reader for a file, by extension (any case): readObj for .obj, readGltf for .gltf and .glb,
+// readPly for .ply;
 // nullptr for formats vkray does not read. The one list of mesh formats: importMesh dispatches
 // through it, and model_scene.h's isModelFile asks it.
 using MeshReader = MeshData (*)(const MeshRequest&);
 MeshReader meshReaderFor(const std::filesystem::path& file);
 
-// Reads the file (by extension: .obj, .gltf, .glb), transforms it and appends its triangles,
+// Reads the file (by extension: .obj, .gltf, .glb, .ply), transforms it and appends its triangles,
 // materials, camera and lights to the scene; records a MeshInfo. Degenerate triangles (zero area
 // after the transform, in double) are dropped and counted. Returns the imported camera, if any.
 std::optional<Camera> importMesh(const MeshRequest& request, Scene& scene);

@@ -1,8 +1,10 @@
 // Wavefront OBJ (+MTL) through tinyobjloader (double-precision build). tinyobjloader only warns
 // about out-of-range indices, and its own triangulation reads vertices through them unchecked,
-// so faces are read untriangulated, every index is checked here, and polygons are split here.
+// so faces are read untriangulated, every index is checked here, and polygons are split here (ear
+// clipping, triangulate.h).
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 #include <iterator>
@@ -12,6 +14,7 @@
 #include <tiny_obj_loader.h>
 
 #include "scene/mesh_import.h"
+#include "scene/triangulate.h"
 #include "util/error.h"
 
 namespace vkray {
@@ -121,22 +124,27 @@ MeshData readObj(const MeshRequest& request) {
                              /*default_vcols_fallback=*/false);
   if (!ok || !err.empty()) throw InputError(where, "not a valid OBJ file: " + firstLine(err));
 
+  std::vector<std::string> warnings;
   if (!request.material) {
-    // The file's materials are used: a missing library or name would silently turn grey.
-    if (!mtlReader.missing.empty()) {
-      throw InputError(where, "material library '" + mtlReader.missing.front() +
-                                  "' not found (give the mesh a 'material' to ignore the file's materials)");
-    }
+    // The file's materials are used: a missing library or name would silently turn grey. In a scene
+    // file that is an error (the scene can give the mesh a material); a model opened on its own
+    // has no such place, so it renders grey and says so.
+    auto missing = [&](const std::string& problem) {
+      if (!request.defaultMissingMaterials) {
+        throw InputError(where, problem + " (give the mesh a 'material' to ignore the file's materials)");
+      }
+      warnings.push_back(problem + "; those faces get the default grey");
+    };
+    if (!mtlReader.missing.empty()) missing("material library '" + mtlReader.missing.front() + "' not found");
     const std::string marker = "material [ '";
     if (auto p = warn.find(marker); p != std::string::npos) {
       auto q = warn.find('\'', p + marker.size());
-      throw InputError(where, "usemtl '" + warn.substr(p + marker.size(), q - p - marker.size()) +
-                                  "' is not in the material library (give the mesh a 'material' to ignore the "
-                                  "file's materials)");
+      missing("usemtl '" + warn.substr(p + marker.size(), q - p - marker.size()) + "' is not in the material library");
     }
   }
 
   MeshData data;
+  data.warnings = std::move(warnings);
   const std::size_t vertexCount = attrib.vertices.size() / 3;
   const std::size_t normalCount = attrib.normals.size() / 3;
   data.positions.resize(vertexCount);
@@ -154,6 +162,9 @@ MeshData readObj(const MeshRequest& request) {
   for (const auto& mtl : materials) data.materials.push_back(mapMtl(mtl, where));
 
   std::vector<bool> checkedVertex(vertexCount, false);
+  std::vector<dvec3> corners;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> cornerIds; // vertex, normal
+  std::vector<Corners> triangles;
   for (const auto& shape : shapes) {
     const auto& mesh = shape.mesh;
     const std::string shapeName = shape.name.empty() ? std::string("(unnamed)") : shape.name;
@@ -200,13 +211,21 @@ MeshData readObj(const MeshRequest& request) {
         material = static_cast<std::uint32_t>(mesh.material_ids[f]);
       }
       if (n >= 3) {
-        // A polygon becomes a fan from its first vertex (exact for convex polygons).
-        auto [v0, n0] = vertex(0);
-        for (std::size_t k = 1; k + 1 < n; ++k) {
-          auto [v1, n1] = vertex(k);
-          auto [v2, n2] = vertex(k + 1);
-          fv = {v0, v1, v2};
-          fn = {n0, n1, n2};
+        // Polygons are split by ear clipping (triangulate.h): concave faces keep their shape, and
+        // convex ones become the fan from their first vertex, as they always did.
+        corners.clear();
+        cornerIds.clear();
+        for (std::size_t k = 0; k < n; ++k) {
+          cornerIds.push_back(vertex(k));
+          corners.push_back(data.positions[cornerIds.back().first]);
+        }
+        triangles.clear();
+        triangulatePolygon(corners, triangles);
+        for (const Corners& t : triangles) {
+          for (int k = 0; k < 3; ++k) {
+            fv[static_cast<std::size_t>(k)] = cornerIds[t[static_cast<std::size_t>(k)]].first;
+            fn[static_cast<std::size_t>(k)] = cornerIds[t[static_cast<std::size_t>(k)]].second;
+          }
           data.faces.push_back(fv);
           if (anyNormals) data.faceNormals.push_back(fn);
           data.faceMaterials.push_back(material);

@@ -90,6 +90,7 @@ Scene loadModelScene(const std::filesystem::path& path, const ModelSceneOptions&
   request.file = path;
   request.shownAs = path.string();
   request.importPresent = true;
+  request.defaultMissingMaterials = true;
   std::optional<Camera> camera = importMesh(request, scene);
   const Bounds bounds = meshBounds(scene, scene.meshes.back());
   if (camera) {

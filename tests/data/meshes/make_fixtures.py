@@ -100,6 +100,37 @@ f 1//1 2//2 3//3
 f 1//1 3//3 4//4
 """)
 
+# ---- PLY ---------------------------------------------------------------------------------------
+
+# box.obj's box as PLY: the same eight corners and six quads, with vertex colours, in ASCII and in
+# big-endian binary (with an element vkray does not read between the vertices and the faces).
+BOX_CORNERS = [(-1, 0, -0.5), (1, 0, -0.5), (1, 2, -0.5), (-1, 2, -0.5),
+               (-1, 0, 0.5), (1, 0, 0.5), (1, 2, 0.5), (-1, 2, 0.5)]
+BOX_QUADS = [(4, 5, 6, 7), (1, 0, 3, 2), (0, 4, 7, 3), (5, 1, 2, 6), (7, 6, 2, 3), (0, 1, 5, 4)]
+
+
+def ply_header(fmt, extra=""):
+    return ("ply\nformat %s 1.0\ncomment box.obj's box (make_fixtures.py)\nelement vertex 8\n"
+            "property float x\nproperty float y\nproperty float z\n"
+            "property uchar red\nproperty uchar green\nproperty uchar blue\n%s"
+            "element face 6\nproperty list uchar int vertex_indices\nend_header\n") % (fmt, extra)
+
+
+def box_color(i):
+    return (255 * (i & 1), 255 * ((i >> 1) & 1), 128)
+
+
+write("box-ascii.ply", ply_header("ascii") +
+      "".join("%g %g %g %d %d %d\n" % (c + box_color(i)) for i, c in enumerate(BOX_CORNERS)) +
+      "".join("4 %d %d %d %d\n" % q for q in BOX_QUADS))
+with open(os.path.join(HERE, "box-binary.ply"), "wb") as f:
+    f.write(ply_header("binary_big_endian", "element edge 2\nproperty list uchar int vertices\n").encode())
+    for i, c in enumerate(BOX_CORNERS):
+        f.write(struct.pack(">3f3B", *c, *box_color(i)))
+    f.write(struct.pack(">B2i", 2, 0, 1) + struct.pack(">B3i", 3, 1, 2, 3))
+    for q in BOX_QUADS:
+        f.write(struct.pack(">B4i", 4, *q))
+
 # ---- glTF --------------------------------------------------------------------------------------
 
 
@@ -301,4 +332,8 @@ write("broken/obj-inf-vertex.obj", "v 0 0 0\nv inf 0 0\nv 0 1 0\nf 1 2 3\n")
 write("broken/obj-nan-vertex.obj", "v 0 0 0\nv 1 0 0\nv 0 nan 0\nf 1 2 3\n")
 write("broken/obj-not-a-number.obj", "v 0 0 0\nv 1 0 0\nv 0 1.5.2 0\nf 1 2 3\n")
 write("broken/obj-unknown-material.obj", "mtllib ../box.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl velvet\nf 1 2 3\n")
-write("broken/mesh.ply", "ply\nformat ascii 1.0\nend_header\n")
+write("broken/ply-point-cloud.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
+      "property float z\nend_header\n0 0 0\n1 1 1\n")
+write("broken/ply-index-out-of-range.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+      "property float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n"
+      "0 0 0\n1 0 0\n0 1 0\n3 0 1 5\n")
