@@ -95,8 +95,9 @@ dvec3 meshCentre(const Scene& scene, const NamedObject& o) {
 
 void readObjectKeys(const JsonNode& node, const Scene& scene, Animation& a) {
   for (auto& [name, keys] : node.members()) {
+    const auto& wanted = name; // clang before 16 cannot capture a structured binding in a lambda
     auto it = std::find_if(scene.namedObjects.begin(), scene.namedObjects.end(),
-                           [&](const NamedObject& o) { return o.name == name; });
+                           [&](const NamedObject& o) { return o.name == wanted; });
     if (it == scene.namedObjects.end()) {
       std::string known;
       for (const NamedObject& o : scene.namedObjects) known += (known.empty() ? "" : ", ") + o.name;
@@ -136,8 +137,9 @@ void readObjectKeys(const JsonNode& node, const Scene& scene, Animation& a) {
 
 void readLightKeys(const JsonNode& node, const Scene& scene, Animation& a) {
   for (auto& [name, keys] : node.members()) {
+    const auto& wanted = name; // as above
     auto it = std::find_if(scene.namedLights.begin(), scene.namedLights.end(),
-                           [&](const NamedLight& l) { return l.name == name; });
+                           [&](const NamedLight& l) { return l.name == wanted; });
     if (it == scene.namedLights.end()) {
       std::string known;
       for (const NamedLight& l : scene.namedLights) known += (known.empty() ? "" : ", ") + l.name;
