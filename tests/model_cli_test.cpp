@@ -63,10 +63,10 @@ protected:
     EXPECT_EQ(r.err, "");
     if (r.exitCode != 0) return 0.0;
     Image image = readImage(out);
-    std::size_t model = std::count_if(image.pixels.begin(), image.pixels.end(), [](const glm::vec3& p) {
+    std::size_t covered = std::count_if(image.pixels.begin(), image.pixels.end(), [](const glm::vec3& p) {
       return glm::length(p - glm::vec3(0.5f, 0.0f, 0.5f)) > 1e-3f;
     });
-    return double(model) / double(image.pixels.size());
+    return double(covered) / double(image.pixels.size());
   }
 
   fs::path dir_;
