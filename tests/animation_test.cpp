@@ -6,6 +6,8 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+
+#include "test_support.h"
 #include <nlohmann/json.hpp>
 
 #include "scene/animation.h"
@@ -130,8 +132,7 @@ TEST(AnimationFrame, DistinctFramesHaveDistinctFingerprints) {
 // A mesh rotated and scaled about its centre equals the mesh placed by the composed matrix.
 TEST(AnimationFrame, MeshRotateScaleAboutItsCentre) {
   namespace fs = std::filesystem;
-  fs::path dir = fs::temp_directory_path() / ("vkray-anim-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("anim");
   std::ofstream(dir / "quad.obj")
       << "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 0 1 0\nvn 0 0 1\nf 1//1 2//1 3//1\nf 1//1 3//1 4//1\n";
   std::string base = R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] },

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.h"
+
 namespace vkray::test {
 namespace {
 
@@ -31,8 +33,7 @@ std::string slurp(const fs::path& p) {
 
 // Runs build/vkray with args (a shell-quoted string), device lavapipe, validation on.
 RunResult vkray(const std::string& args) {
-  fs::path dir = fs::temp_directory_path() / ("vkray-cli-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("cli");
   std::string cmd = std::string("VKRAY_DEVICE=llvmpipe '") + VKRAY_BINARY + "' " + args + " >" +
                     (dir / "out").string() + " 2>" + (dir / "err").string();
   int status = std::system(cmd.c_str());
@@ -45,11 +46,7 @@ RunResult vkray(const std::string& args) {
 
 class Cli : public ::testing::Test {
 protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vkray-cli-test-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::freshScratchDir("cli-test"); }
   void TearDown() override { fs::remove_all(dir_); }
   fs::path write(const std::string& name, const std::string& text) {
     fs::path p = dir_ / name;

@@ -16,6 +16,8 @@
 #include <vector>
 
 #include <gtest/gtest.h>
+
+#include "test_support.h"
 #include <nlohmann/json.hpp>
 
 #include "image/image_io.h"
@@ -135,8 +137,7 @@ void collectSites(const json& j, const json::json_pointer& pointer, const std::s
 class HardeningScene : public ::testing::Test {
 protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vkray-hardening-" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
+    dir_ = test::scratchDir("hardening");
     std::ofstream(dir_ / "tetra.obj") << kTetraObj;
     std::ofstream(dir_ / "triangle.gltf") << kTriangleGltf;
     base_ = json::parse(kEverything);
@@ -427,8 +428,7 @@ TEST(HardeningMeshCorpus, EveryFileHasAnExpectation) {
 TEST(HardeningFuzz, FindingsStayFixed) {
   fs::path root = kMalformedDir / "fuzz";
   if (!fs::exists(root)) GTEST_SKIP() << "no fuzz findings recorded";
-  fs::path scratch = fs::temp_directory_path() / ("vkray-fuzz-replay-" + std::to_string(::getpid()));
-  fs::create_directories(scratch);
+  fs::path scratch = test::scratchDir("fuzz-replay");
   int replayed = 0;
   for (const auto& entry : fs::recursive_directory_iterator(root)) {
     if (!entry.is_regular_file()) continue;
@@ -477,9 +477,7 @@ TEST(HardeningFuzz, FindingsStayFixed) {
 // A process killed between creating its temporary output and renaming it leaves a hidden
 // ".NAME.tmp-PID-XXXXXX"; the next write to NAME removes it, and leaves live writers' files alone.
 TEST(HardeningOutput, StaleTemporariesOfDeadWritersAreRemoved) {
-  fs::path dir = fs::temp_directory_path() / ("vkray-stale-" + std::to_string(::getpid()));
-  fs::remove_all(dir);
-  fs::create_directories(dir);
+  fs::path dir = test::freshScratchDir("stale");
   pid_t dead = ::fork();
   if (dead == 0) ::_exit(0);
   ASSERT_GT(dead, 0);

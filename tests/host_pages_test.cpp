@@ -172,8 +172,7 @@ TEST(CliHostPages, StatsReportThePagesAndTheFlagTurnsThemOff) {
   }
   if (!imports) GTEST_SKIP() << "lavapipe imports no host memory here";
   namespace fs = std::filesystem;
-  fs::path dir = fs::temp_directory_path() / ("vkray-cli-pages-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("cli-pages");
   // A 320 x 200 grid of quads: 128 000 triangles, 5.9 MiB of them in the kernel's layout.
   {
     std::ofstream obj(dir / "grid.obj");

@@ -356,8 +356,7 @@ TEST(MeshImportBroken, EveryFixtureHasARow) {
 
 // Writes a mesh as an OBJ file (shared vertices, as a modelling tool would).
 fs::path writeObj(const test::numerics::Mesh& mesh, const std::string& name) {
-  fs::path dir = fs::temp_directory_path() / ("vkray-mesh-test-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("mesh-test");
   fs::path path = dir / name;
   std::ofstream out(path);
   out.precision(17);
@@ -520,8 +519,7 @@ TEST(RenderMesh, ArraysBeyondTheTexelBufferLimitAreRefusedWithTheLimitNamed) {
 // `bench meshes` does: 48-byte triangles, the BVH, and three 16-byte shading normals for each of
 // smooth.obj's 2 triangles (the only ones with vertex normals).
 TEST(CliMesh, StatsReportTheBvhAndTheMeshes) {
-  fs::path dir = fs::temp_directory_path() / ("vkray-cli-mesh-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("cli-mesh");
   fs::path scene = dir / "fan.json";
   std::ofstream(scene) << R"({ "camera": { "position": [1, 1, 6], "look_at": [1, 1, 0] },
     "objects": [ { "type": "mesh", "file": ")"

@@ -11,6 +11,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.h"
+
 #include "image/image_io.h"
 
 namespace vkray::test {
@@ -34,11 +36,7 @@ std::string slurp(const fs::path& p) {
 
 class CliModel : public ::testing::Test {
 protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vkray-cli-model-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::freshScratchDir("cli-model"); }
   void TearDown() override { fs::remove_all(dir_); }
 
   // build/vkray with args (shell-quoted), on lavapipe.

@@ -6,6 +6,8 @@
 #include <fstream>
 
 #include <gtest/gtest.h>
+
+#include "test_support.h"
 #include <nlohmann/json.hpp>
 
 #include "scene/model_scene.h"
@@ -218,8 +220,7 @@ TEST(HardeningAssimp, AnyUnsupportedRequiredExtensionIsRefusedByName) {
 
 // A Draco primitive in a file that only lists Draco as used (not required) is refused at the primitive.
 TEST(HardeningGltf, DracoPrimitiveIsRefusedAtItsPath) {
-  fs::path dir = fs::temp_directory_path() / ("vkray-model-test-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("model-test");
   fs::path f = dir / "draco-used.gltf";
   std::ofstream(f) << R"({"asset": {"version": "2.0"}, "extensionsUsed": ["KHR_draco_mesh_compression"],
     "meshes": [{"primitives": [{"attributes": {"POSITION": 0},
@@ -279,8 +280,7 @@ TEST(HardeningFloat32, JsonNumberOverflowNamesItsLineAndColumn) {
 }
 
 TEST(HardeningFloat32, MeshVertexPastFloat32IsNamedByFileAndVertex) {
-  fs::path dir = fs::temp_directory_path() / ("vkray-model-test-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("model-test");
   fs::path f = dir / "far.obj";
   std::ofstream(f) << "v 0 0 0\nv 1 0 0\nv 0 1e39 0\nf 1 2 3\n";
   std::string what = refusal(f);
@@ -294,8 +294,7 @@ TEST(HardeningFloat32, MeshVertexPastFloat32IsNamedByFileAndVertex) {
 }
 
 TEST(HardeningFloat32, MeshMaterialPastFloat32IsNamed) {
-  fs::path dir = fs::temp_directory_path() / ("vkray-model-test-" + std::to_string(::getpid()));
-  fs::create_directories(dir);
+  fs::path dir = test::scratchDir("model-test");
   std::ofstream(dir / "hot.mtl") << "newmtl hot\nKd 1e39 0 0\n";
   fs::path f = dir / "hot.obj";
   std::ofstream(f) << "mtllib hot.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nusemtl hot\nf 1 2 3\n";

@@ -15,6 +15,8 @@
 #include <string>
 
 #include <gtest/gtest.h>
+
+#include "test_support.h"
 #include <nlohmann/json.hpp>
 #include <unistd.h>
 
@@ -208,10 +210,7 @@ std::vector<PlyElement> modelElements(const Model& m) {
 
 class PlyImport : public ::testing::Test {
 protected:
-  void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vkray-ply-test-" + std::to_string(::getpid()));
-    fs::create_directories(dir_);
-  }
+  void SetUp() override { dir_ = test::scratchDir("ply-test"); }
   void TearDown() override { fs::remove_all(dir_); }
 
   fs::path write(const std::string& name, const std::string& bytes) {

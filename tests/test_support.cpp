@@ -1,6 +1,8 @@
 // Shared GPU context, renderer and helpers for the tests (see test_support.h).
 #include "test_support.h"
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <cstdlib>
 #include <memory>
@@ -73,6 +75,19 @@ bool syncValidationRequested() {
 
 std::string scenePath(const std::string& name) {
   return std::string(VKRAY_SOURCE_DIR "/scenes/") + name;
+}
+
+std::filesystem::path scratchDir(const std::string& name) {
+  auto dir = std::filesystem::temp_directory_path() / ("vkray-" + name + "-" + std::to_string(::getpid()));
+  std::filesystem::create_directories(dir);
+  return dir;
+}
+
+std::filesystem::path freshScratchDir(const std::string& name) {
+  auto dir = std::filesystem::temp_directory_path() / ("vkray-" + name + "-" + std::to_string(::getpid()));
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  return dir;
 }
 
 } // namespace vkray::test

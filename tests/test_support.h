@@ -2,6 +2,7 @@
 // fails the test that caused it), a shared renderer, and small helpers to build scenes from JSON.
 #pragma once
 
+#include <filesystem>
 #include <string>
 #include <vector>
 
@@ -41,5 +42,10 @@ bool syncValidationRequested();
 
 // Where the bundled scenes live (the source tree's scenes/).
 std::string scenePath(const std::string& name);
+
+// A directory of this test process for scratch files, $TMPDIR/vkray-NAME-PID, created if missing;
+// freshScratchDir empties it first.
+std::filesystem::path scratchDir(const std::string& name);
+std::filesystem::path freshScratchDir(const std::string& name);
 
 } // namespace vkray::test

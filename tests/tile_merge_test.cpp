@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.h"
+
 #include "image/image_io.h"
 #include "image/tile_io.h"
 #include "util/error.h"
@@ -16,9 +18,7 @@ namespace fs = std::filesystem;
 class TileMerge : public ::testing::Test {
 protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vkray-tiles-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test::freshScratchDir("tiles");
     image_ = Image(7, 10);
     for (std::uint32_t y = 0; y < image_.height; ++y) {
       for (std::uint32_t x = 0; x < image_.width; ++x)

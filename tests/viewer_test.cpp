@@ -17,6 +17,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.h"
+
 #include "image/image_io.h"
 #include "image/metrics.h"
 #include "scene/features.h"
@@ -125,9 +127,7 @@ TEST(ViewSettings, KnobsCompareEverythingButTheImageSize) {
 class SceneWatcherTest : public ::testing::Test {
 protected:
   void SetUp() override {
-    dir_ = fs::temp_directory_path() / ("vkray-watch-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test::freshScratchDir("watch");
     file_ = dir_ / "s.json";
   }
   void TearDown() override { fs::remove_all(dir_); }
@@ -193,8 +193,7 @@ class Viewer : public ::testing::Test {
 protected:
   static void SetUpTestSuite() {
     // One pipeline cache for the suite's runs: the first compiles the kernel, the rest reuse it.
-    cacheDir_ = fs::temp_directory_path() / ("vkray-viewer-cache-" + std::to_string(::getpid()));
-    fs::create_directories(cacheDir_);
+    cacheDir_ = test::scratchDir("viewer-cache");
   }
   static void TearDownTestSuite() { fs::remove_all(cacheDir_); }
   void SetUp() override {
@@ -202,9 +201,7 @@ protected:
     if (display == nullptr || *display == '\0') {
       GTEST_SKIP() << "no display: the viewer tests run under xvfb-run (ctest's 'viewer' entry)";
     }
-    dir_ = fs::temp_directory_path() / ("vkray-viewer-test-" + std::to_string(::getpid()));
-    fs::remove_all(dir_);
-    fs::create_directories(dir_);
+    dir_ = test::freshScratchDir("viewer-test");
   }
   void TearDown() override {
     if (!dir_.empty()) fs::remove_all(dir_);
