@@ -120,6 +120,10 @@ private:
   void quiesce();
   void collectStats();
   void publishStats(bool force);
+  // A changed scene file: follows what was edited in it (into `edited`) and says whether it reloaded.
+  bool followReload(ViewSettings& edited);
+  // Scripted runs: counts the frame, resizes halfway when asked, and says whether the script is done.
+  bool scriptFinished(const Accumulation::Step& step);
   void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex, bool captureWindow,
                    bool countRays);
   bool takeCountTurn(const Accumulation::Step& step);
@@ -521,6 +525,42 @@ ViewerSummary FrameLoop::summarize() const {
   return v;
 }
 
+bool FrameLoop::followReload(ViewSettings& edited) {
+  // Scripted runs check every frame, so a test's edit is seen on the next frame.
+  const std::string errorBefore = watcher_.error();
+  bool reloaded = watcher_.poll(scripted() ? std::chrono::milliseconds(0) : std::chrono::milliseconds(250));
+  if (reloaded) {
+    Scene next = watcher_.scene();
+    if (o_.applyOverrides) o_.applyOverrides(next.render);
+    // What was edited in the file is followed (camera, settings); the rest of the user's changes stay.
+    camera_.setHome(next.camera, !sameCamera(next.camera, scene_.camera));
+    if (!sameKnobs(next.render, scene_.render)) edited.render = next.render;
+    scene_ = std::move(next);
+    status_ = "reloaded " + o_.scene.string();
+    std::printf("vkray: %s\n", status_.c_str());
+    std::fflush(stdout);
+  } else if (!watcher_.error().empty() && watcher_.error() != errorBefore) {
+    std::fprintf(stderr, "vkray: reload failed, keeping the last good scene: %s\n", watcher_.error().c_str());
+  }
+  return reloaded;
+}
+
+bool FrameLoop::scriptFinished(const Accumulation::Step& step) {
+  if (step.count > 0) ++tracedFrames_;
+  const bool wantResize = o_.resizeToWidth && o_.resizeToHeight;
+  if (wantResize && !resizeRequested_ && tracedFrames_ * 2 >= o_.frames) {
+    window_.setSize(*o_.resizeToWidth, *o_.resizeToHeight);
+    resizeRequested_ = true;
+    resizeRequestedAt_ = Clock::now();
+  }
+  const bool resized = !wantResize || swapchain_.extent() == vk::Extent2D(*o_.resizeToWidth, *o_.resizeToHeight);
+  if (wantResize && resizeRequested_ && !resized && msBetween(resizeRequestedAt_, Clock::now()) > 10000.0) {
+    throw Error("the window was not resized to " + std::to_string(*o_.resizeToWidth) + "x" +
+                std::to_string(*o_.resizeToHeight) + " within 10 s");
+  }
+  return resized && tracedFrames_ >= o_.frames;
+}
+
 int FrameLoop::run() {
   auto previous = Clock::now();
   // Frames before this are not timed in --stats (the first ones wait for pipeline creation).
@@ -557,22 +597,7 @@ int FrameLoop::run() {
     if (req.saveCamera) handleAction(ViewerAction::SaveCamera);
     if (req.screenshot) handleAction(ViewerAction::Screenshot);
 
-    // Scripted runs check every frame, so a test's edit is seen on the next frame.
-    const std::string errorBefore = watcher_.error();
-    bool reloaded = watcher_.poll(scripted() ? std::chrono::milliseconds(0) : std::chrono::milliseconds(250));
-    if (reloaded) {
-      Scene next = watcher_.scene();
-      if (o_.applyOverrides) o_.applyOverrides(next.render);
-      // What was edited in the file is followed (camera, settings); the rest of the user's changes stay.
-      camera_.setHome(next.camera, !sameCamera(next.camera, scene_.camera));
-      if (!sameKnobs(next.render, scene_.render)) edited.render = next.render;
-      scene_ = std::move(next);
-      status_ = "reloaded " + o_.scene.string();
-      std::printf("vkray: %s\n", status_.c_str());
-      std::fflush(stdout);
-    } else if (!watcher_.error().empty() && watcher_.error() != errorBefore) {
-      std::fprintf(stderr, "vkray: reload failed, keeping the last good scene: %s\n", watcher_.error().c_str());
-    }
+    const bool reloaded = followReload(edited);
     if (o_.spinDegrees != 0.0) camera_.orbit(o_.spinDegrees * 3.14159265358979323846 / 180.0, 0.0);
     applyChanges(edited, reloaded, !sameCamera(cameraBefore, camera_.camera()));
     publishStats(false);
@@ -616,21 +641,7 @@ int FrameLoop::run() {
       totalCounted_ = 0;
     }
 
-    if (scripted()) {
-      if (step.count > 0) ++tracedFrames_;
-      const bool wantResize = o_.resizeToWidth && o_.resizeToHeight;
-      if (wantResize && !resizeRequested_ && tracedFrames_ * 2 >= o_.frames) {
-        window_.setSize(*o_.resizeToWidth, *o_.resizeToHeight);
-        resizeRequested_ = true;
-        resizeRequestedAt_ = Clock::now();
-      }
-      const bool resized = !wantResize || swapchain_.extent() == vk::Extent2D(*o_.resizeToWidth, *o_.resizeToHeight);
-      if (wantResize && resizeRequested_ && !resized && msBetween(resizeRequestedAt_, Clock::now()) > 10000.0) {
-        throw Error("the window was not resized to " + std::to_string(*o_.resizeToWidth) + "x" +
-                    std::to_string(*o_.resizeToHeight) + " within 10 s");
-      }
-      if (resized && tracedFrames_ >= o_.frames) break;
-    }
+    if (scripted() && scriptFinished(step)) break;
   }
 
   publishStats(true);
