@@ -74,6 +74,9 @@ Features analyzeScene(const Scene& scene, const RenderSettings& settings) {
   f.polygons = !scene.polygons.empty();
   f.smoothNormals = std::any_of(scene.triangles.begin(), scene.triangles.end(),
                                 [](const Triangle& t) { return t.normals.has_value(); });
+  f.textures = std::any_of(scene.triangles.begin(), scene.triangles.end(), [&](const Triangle& t) {
+    return t.uvs.has_value() && scene.materials[t.material].baseColorTexture.has_value();
+  });
   for (const Material& m : scene.materials) {
     if (m.checker) f.checker = true;
     if (m.reflection > 0.0) f.anyReflectiveMaterial = true;
@@ -131,6 +134,8 @@ std::vector<std::string> Features::explain() const {
   add(triangles, smoothNormals ? "triangles (smooth normals)" : "triangles");
   lines.push_back("primitives: " + (prims.empty() ? std::string("none") : prims) +
                   " (code for absent kinds is compiled out)");
+  lines.push_back(textures ? "textures: on (base-colour textures sampled on triangles)"
+                           : "textures: off (no textured triangle; texture code compiled out)");
 
   if (shadows) {
     std::string line = "shadows: on (" + plural(static_cast<std::size_t>(shadowLights), "light") + ")";

@@ -27,9 +27,13 @@ struct MeshData {
   std::vector<std::array<std::uint32_t, 3>> faceNormals; // into normals (kNone: none); empty or one per face
   std::vector<std::uint32_t> faceMaterials;              // into materials, kNone: the default
   std::vector<Material> materials;                       // named "file: material"
-  std::optional<Camera> camera;                          // the first camera, when asked for
-  std::vector<PointLight> lights;                        // when asked for
-  std::string noTrianglesReason; // the reader's word on why the file has no faces ("points only")
+  // Texture coordinates per position (xy TEXCOORD_0, zw TEXCOORD_1); empty when the file has none.
+  std::vector<glm::dvec4> texcoords;
+  // The textures materials' baseColorTexture indices refer to (appendMesh moves them to the scene).
+  std::vector<std::shared_ptr<const Texture>> textures;
+  std::optional<Camera> camera;   // the first camera, when asked for
+  std::vector<PointLight> lights; // when asked for
+  std::string noTrianglesReason;  // the reader's word on why the file has no faces ("points only")
 };
 
 enum class MeshNormals {

@@ -45,6 +45,7 @@ void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
 Surface surfaceAt(TraceRay r, Hit hit) {
   Surface s;
   s.kind = hit.kind;
+  if (TEXTURES) s.hasUv = false;
   if (hit.kind == kPrimSphere) {
     Sphere sph = loadSphere(hit.index);
     sphereHitPoint(r.ray, hit.t, sphereCenter(sph), sphereRadius(sph), s.p, s.ng, s.errorBound);
@@ -62,6 +63,14 @@ Surface surfaceAt(TraceRay r, Hit hit) {
       if (len > 0.0) s.ns = n / len; // zero-length interpolated normal: keep the geometric one
     }
     s.material = triangleMaterial(tri);
+    uint uvBase = triangleUvBasePlusOne(tri);
+    if (TEXTURES && uvBase != 0u) {
+      int b = int(uvBase - 1u);
+      s.uv = hit.bary.x * texelFetch(texCoordTexels, b) + hit.bary.y * texelFetch(texCoordTexels, b + 1) +
+             hit.bary.z * texelFetch(texCoordTexels, b + 2);
+      s.uvLodBias = texelFetch(texCoordTexels, b + 3).xy;
+      s.hasUv = true;
+    }
   } else if (hit.kind == kPrimPolygon) {
     Polygon poly = loadPolygon(hit.index);
     polygonSurface(r.ray, hit.t, loadPolyVertex(polygonFirstVertex(poly)), s.p, s.errorBound);
