@@ -438,6 +438,8 @@ TEST(HardeningFuzz, FindingsStayFixed) {
         Scene scene = loadSceneFromString(bytes, "fuzz.json", VKRAY_SOURCE_DIR "/scenes");
         Features f = analyzeScene(scene, scene.render);
         packScene(scene, scene.camera.position, f.useBvh);
+      } else if (target == "texture") {
+        decodeTextureData(bytes, "fuzz.png");
       } else {
         // obj and gltf inputs: the file, then optionally "#---companion---" and its MTL or .bin.
         const std::string marker = "\n#---companion---\n";

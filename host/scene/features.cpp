@@ -134,8 +134,8 @@ std::vector<std::string> Features::explain() const {
   add(triangles, smoothNormals ? "triangles (smooth normals)" : "triangles");
   lines.push_back("primitives: " + (prims.empty() ? std::string("none") : prims) +
                   " (code for absent kinds is compiled out)");
-  lines.push_back(textures ? "textures: on (base-colour textures sampled on triangles)"
-                           : "textures: off (no textured triangle; texture code compiled out)");
+  // Said only when on: a scene without textures explains itself as before.
+  if (textures) lines.push_back("textures: on (base-colour textures on triangles; sampling compiled in)");
 
   if (shadows) {
     std::string line = "shadows: on (" + plural(static_cast<std::size_t>(shadowLights), "light") + ")";

@@ -207,6 +207,14 @@ std::vector<std::uint8_t> decodeDataUri(std::string_view uri, const std::string&
   return out;
 }
 
+std::vector<TextureLevel> decodeTextureData(std::string_view bytes, const std::string& shownAs) {
+  if (bytes.substr(0, 5) == "data:") {
+    std::vector<std::uint8_t> decoded = decodeDataUri(bytes, shownAs);
+    return buildMipChain(decodeImage(decoded.data(), decoded.size(), shownAs));
+  }
+  return buildMipChain(decodeImage(reinterpret_cast<const std::uint8_t*>(bytes.data()), bytes.size(), shownAs));
+}
+
 std::vector<TextureLevel> buildMipChain(TextureLevel base) {
   std::vector<TextureLevel> levels;
   levels.push_back(std::move(base));

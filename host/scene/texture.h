@@ -50,6 +50,10 @@ TextureLevel readImageFile(const std::filesystem::path& file, const std::string&
 // "data:[<mime>][;base64],<payload>" to bytes; InputError naming `shownAs` for anything else.
 std::vector<std::uint8_t> decodeDataUri(std::string_view uri, const std::string& shownAs);
 
+// The decoding path of untrusted texture data, as the fuzz target drives it: bytes that start
+// with "data:" are a data URI, decoded first; then the image is decoded and its mip chain built.
+std::vector<TextureLevel> decodeTextureData(std::string_view bytes, const std::string& shownAs);
+
 // The mip chain below `base`: each level halves each side (rounding down, at least 1) and each of
 // its texels is the area-weighted mean of the texels of the level above it covers, so odd (NPOT)
 // sides are filtered exactly and every level keeps the image's mean.
