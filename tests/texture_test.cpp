@@ -354,3 +354,72 @@ TEST(RenderTexture, RayConesAtOneSampleAreCloserToTheReferenceThanBilinear) {
 
 } // namespace
 } // namespace vkray
+
+namespace vkray {
+namespace {
+
+// A 1 x 1 quad in z = 0 (x in [x0, 1], y in [-1, 1]) with uv u = (x + 1) / 2, over a white wall at
+// z = -1, lit from the side so the quad's shadow falls on the wall. Its material's texture is 2 x 1
+// texels: the left one red with alpha 0, the right one green with alpha 1.
+Scene maskScene(double x0, bool mask) {
+  Scene s;
+  s.camera.position = {0.0, 0.0, 5.0};
+  s.camera.lookAt = {0.0, 0.0, 0.0};
+  s.camera.fovY = 50.0;
+  s.render.width = 64;
+  s.render.height = 48;
+  s.render.maxDepth = 0;
+  s.render.textureFilter = TextureFilter::Nearest;
+  s.ambientLight = glm::dvec3(0.1);
+  s.lights.push_back(PointLight{{2.5, 1.0, 3.0}, {1.0, 1.0, 1.0}, true});
+  auto tex = std::make_shared<Texture>();
+  TextureLevel l;
+  l.width = 2;
+  l.height = 1;
+  l.texels = {glm::vec4(1, 0, 0, 0), glm::vec4(0, 1, 0, 1)};
+  tex->levels = buildMipChain(l);
+  tex->wrapS = tex->wrapT = TextureWrap::Clamp;
+  s.textures.push_back(tex);
+  Material quad;
+  quad.color = glm::dvec3(1.0);
+  quad.baseColorTexture = MaterialTexture{};
+  if (mask) quad.alphaCutoff = 0.5;
+  Material wall;
+  wall.color = glm::dvec3(0.9);
+  s.materials = {quad, wall};
+  s.planes.push_back(Plane{{0, 0, 1}, 1.0, 1});
+  auto corner = [](double x, double y) { return glm::dvec4((x + 1) / 2, (1 - y) / 2, 0, 0); };
+  glm::dvec3 p[4] = {{x0, -1, 0}, {1, -1, 0}, {1, 1, 0}, {x0, 1, 0}};
+  for (auto [a, b, c] : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+    Triangle t;
+    t.v[0] = p[a];
+    t.v[1] = p[b];
+    t.v[2] = p[c];
+    t.uvs = std::array<glm::dvec4, 3>{corner(p[a].x, p[a].y), corner(p[b].x, p[b].y), corner(p[c].x, p[c].y)};
+    t.material = 0;
+    s.triangles.push_back(t);
+  }
+  return s;
+}
+
+// The masked quad renders as the quad's opaque half alone, its shadow included: the cut-out half
+// is gone for eye rays and shadow rays alike (only pixels on the cut line may differ).
+TEST(RenderTexture, AlphaMaskCutsOutForEyeAndShadowRays) {
+  Scene masked = maskScene(-1.0, true);
+  EXPECT_TRUE(analyzeScene(masked, masked.render).alphaMask);
+  Image cut = test::render(masked).image;
+  Image half = test::render(maskScene(0.0, false)).image;
+  Image whole = test::render(maskScene(-1.0, false)).image;
+  int differ = 0, differWhole = 0;
+  for (std::size_t i = 0; i < cut.pixels.size(); ++i) {
+    differ += glm::length(cut.pixels[i] - half.pixels[i]) > 1e-5f;
+    differWhole += glm::length(cut.pixels[i] - whole.pixels[i]) > 1e-5f;
+  }
+  EXPECT_LE(differ, 2 * 48) << "beyond the pixels on the cut line";
+  EXPECT_GT(differWhole, 300) << "the cut-out half should show the wall and let light through";
+  Scene opaque = maskScene(-1.0, false);
+  EXPECT_FALSE(analyzeScene(opaque, opaque.render).alphaMask);
+}
+
+} // namespace
+} // namespace vkray

@@ -171,8 +171,8 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     gm.phong = glm::vec4(static_cast<float>(m.diffuse), static_cast<float>(m.specular), static_cast<float>(m.shininess),
                          static_cast<float>(m.reflection));
     gm.transmission = glm::vec4(static_cast<float>(m.transmission), static_cast<float>(m.ior),
-                                std::bit_cast<float>(textureRef[mi]), 0.0f);
-    gm.absorption = glm::vec4(glm::vec3(m.absorption), 0.0f);
+                                std::bit_cast<float>(textureRef[mi]), static_cast<float>(m.alphaCutoff));
+    gm.absorption = glm::vec4(glm::vec3(m.absorption), m.alphaCutoff > 0.0 ? static_cast<float>(m.alpha) : 0.0f);
     g.materials.push_back(gm);
   }
   for (const PointLight& l : scene.lights) {

@@ -670,6 +670,11 @@ private:
     m.diffuse = 0.8 * (1.0 - m.reflection - m.transmission);
     // Ambient light is reflected as diffuse light is: ambient term = ambient light x diffuse x base.
     m.ambient = m.diffuse;
+    if (g.alphaMode == "MASK") {
+      // A cutoff of 0 cuts nothing (glTF discards alpha < cutoff); a tiny one keeps the mask on.
+      m.alphaCutoff = std::isfinite(g.alphaCutoff) ? std::clamp(g.alphaCutoff, 1e-6, 1.0) : 0.5;
+      m.alpha = alpha;
+    }
     if (pbr.baseColorTexture.index >= 0) {
       const std::string where = "materials[" + std::to_string(index) + "].pbrMetallicRoughness.baseColorTexture";
       m.baseColorTexture = materialTexture(pbr.baseColorTexture, where);

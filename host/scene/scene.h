@@ -109,6 +109,10 @@ struct Material {
   std::optional<Checker> checker;
   // The base colour is color x this texture's texel (glTF baseColorTexture x baseColorFactor).
   std::optional<MaterialTexture> baseColorTexture;
+  // glTF alphaMode MASK: triangles are cut out where alpha x the texture's alpha < alphaCutoff
+  // (0: not masked). Triangles only.
+  double alphaCutoff = 0.0;
+  double alpha = 1.0; // baseColorFactor's alpha
 };
 
 struct PointLight {

@@ -5,6 +5,7 @@
 #define VKRAY_PRIMITIVES_GLSL
 
 #include "precision.glsl"
+#include "texture.glsl"
 
 float sphereT(TraceRay r, uint i, float tMax) {
   Sphere s = loadSphere(i);
@@ -34,7 +35,7 @@ void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
   } else if (HAS_TRIANGLES && kind == kPrimTriangle) {
     vec3 bary;
     float t = triangleT(r, index, hit.t, bary);
-    if (t > 0.0) hit = Hit(t, kPrimTriangle, index, bary);
+    if (t > 0.0 && !(ALPHA_MASK && alphaCutOut(index, bary))) hit = Hit(t, kPrimTriangle, index, bary);
   } else if (HAS_POLYGONS && kind == kPrimPolygon) {
     float t = polygonT(r, index, hit.t);
     if (t > 0.0) hit = Hit(t, kPrimPolygon, index, vec3(0.0));

@@ -33,6 +33,7 @@ layout(constant_id = kSpecMaterialCount) const uint MATERIAL_COUNT = kRuntimeCou
 layout(constant_id = kSpecEntryPoints) const bool ENTRY_POINTS = false;
 layout(constant_id = kSpecTextures) const bool TEXTURES = false;
 layout(constant_id = kSpecTextureFilter) const uint TEXTURE_FILTER = kTextureCone;
+layout(constant_id = kSpecAlphaMask) const bool ALPHA_MASK = false;
 
 const bool ROBUST = NUMERICS == kNumericsRobust;
 

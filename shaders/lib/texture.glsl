@@ -49,17 +49,15 @@ vec4 sampleLevelBilinear(uvec4 level, vec2 uv, uint wrapS, uint wrapT) {
   return mix(top, bottom, f.y);
 }
 
-// The material's base-colour texel at the surface; 1 for untextured materials and surfaces
-// without texture coordinates.
-vec4 baseColorTexel(Material mat, Surface s) {
-  uint ref = textureRefPlusOne(mat);
-  if (ref == 0u || !s.hasUv) return vec4(1.0);
+// Texture reference `ref` (+ 1) at texture coordinates `uvs` (both sets), with the triangle's lod
+// biases and the ray cone's footprint (0: the full-size image).
+vec4 baseColorTexelAt(uint ref, vec4 uvs, vec2 uvLodBias, float footprint) {
   int r = int((ref - 1u) * kTextureRefTexels);
   uvec4 head = texelFetch(textureInfoTexels, r);
   uvec4 row0 = texelFetch(textureInfoTexels, r + 1);
   uvec4 row1 = texelFetch(textureInfoTexels, r + 2);
   bool set1 = head.w != 0u;
-  vec3 uv1 = vec3(set1 ? s.uv.zw : s.uv.xy, 1.0);
+  vec3 uv1 = vec3(set1 ? uvs.zw : uvs.xy, 1.0);
   vec2 uv = vec2(dot(uintBitsToFloat(row0.xyz), uv1), dot(uintBitsToFloat(row1.xyz), uv1));
   uint wrapS = head.z & 3u;
   uint wrapT = (head.z >> 2u) & 3u;
@@ -69,7 +67,7 @@ vec4 baseColorTexel(Material mat, Surface s) {
   if (TEXTURE_FILTER == kTextureNearest) return sampleLevelNearest(base, w);
   if (TEXTURE_FILTER == kTextureBilinear) return nearest ? sampleLevelNearest(base, w) : sampleLevelBilinear(base, w, wrapS, wrapT);
   // Ray cones: lambda = 0.5 log2(texel area / world area) + log2(width / |n.d|) (RTG eq. 20.7).
-  float lod = (set1 ? s.uvLodBias.y : s.uvLodBias.x) + uintBitsToFloat(row0.w) + log2(max(gConeFootprint, 1e-30));
+  float lod = (set1 ? uvLodBias.y : uvLodBias.x) + uintBitsToFloat(row0.w) + log2(max(footprint, 1e-30));
   if (nearest && lod <= 0.0) return sampleLevelNearest(base, w); // magnified: the sampler's filter
   lod = clamp(lod, 0.0, float(head.y - 1u));
   uint l0 = uint(lod);
@@ -77,6 +75,34 @@ vec4 baseColorTexel(Material mat, Surface s) {
   vec4 a = sampleLevelBilinear(texelFetch(textureInfoTexels, int(head.x + l0)), w, wrapS, wrapT);
   vec4 b = sampleLevelBilinear(texelFetch(textureInfoTexels, int(head.x + l1)), w, wrapS, wrapT);
   return mix(a, b, lod - float(l0));
+}
+
+// The material's base-colour texel at the surface; 1 for untextured materials and surfaces
+// without texture coordinates.
+vec4 baseColorTexel(Material mat, Surface s) {
+  uint ref = textureRefPlusOne(mat);
+  if (ref == 0u || !s.hasUv) return vec4(1.0);
+  return baseColorTexelAt(ref, s.uv, s.uvLodBias, gConeFootprint);
+}
+
+// glTF alphaMode MASK (ALPHA_MASK only): a candidate hit on triangle `index` at `bary` does not
+// count where the base colour's alpha (factor x texel, the full-size image: the intersection test
+// has no ray cone) is below the material's cutoff. Used by every query, so shadow rays pass
+// through the cut-out parts too.
+bool alphaCutOut(uint index, vec3 bary) {
+  Triangle tri = loadTriangle(index);
+  Material m = loadMaterial(triangleMaterial(tri));
+  float cutoff = alphaCutoff(m);
+  float alpha = baseAlpha(m);
+  uint ref = textureRefPlusOne(m);
+  uint uvBase = triangleUvBasePlusOne(tri);
+  if (TEXTURES && cutoff > 0.0 && ref != 0u && uvBase != 0u) {
+    int b = int(uvBase - 1u);
+    vec4 uvs = bary.x * texelFetch(texCoordTexels, b) + bary.y * texelFetch(texCoordTexels, b + 1) +
+               bary.z * texelFetch(texCoordTexels, b + 2);
+    alpha *= baseColorTexelAt(ref, uvs, vec2(0.0), 0.0).a;
+  }
+  return alpha < cutoff;
 }
 
 #endif

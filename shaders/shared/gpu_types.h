@@ -105,7 +105,9 @@ VKRAY_CONST(uint, kSpecEntryPoints, 26u);
 // Some material has a base-colour texture (and some triangle texture coordinates).
 VKRAY_CONST(uint, kSpecTextures, 27u);
 VKRAY_CONST(uint, kSpecTextureFilter, 28u); // kTextureNearest / kTextureBilinear / kTextureCone
-VKRAY_CONST(uint, kSpecCount, 29u);
+// Some triangle's material is glTF alphaMode MASK: the triangle test skips cut-out hits.
+VKRAY_CONST(uint, kSpecAlphaMask, 29u);
+VKRAY_CONST(uint, kSpecCount, 30u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -176,8 +178,8 @@ struct Material {
   vec4 color2;       // rgb: checker's second colour; a: checker square size (0: no checker)
   vec4 phong;        // x: diffuse, y: specular, z: shininess (Phong exponent), w: reflection 0..1
   vec4 transmission; // x: transmission 0..1, y: index of refraction, z: texture reference + 1 (bits;
-                     // 0: none), w: unused
-  vec4 absorption;   // rgb: Beer-Lambert absorption per unit length; a: unused
+                     // 0: none), w: alpha cutoff (alphaMode MASK; 0: not masked)
+  vec4 absorption;   // rgb: Beer-Lambert absorption per unit length; a: base colour alpha (MASK)
 };
 
 struct Light {
@@ -267,6 +269,12 @@ float refractiveIndex(Material m) {
 uint textureRefPlusOne(Material m) {
   return floatBitsToUint(m.transmission.z);
 } // 0: untextured
+float alphaCutoff(Material m) {
+  return m.transmission.w;
+} // 0: not masked
+float baseAlpha(Material m) {
+  return m.absorption.a;
+}
 vec3 absorptionPerUnit(Material m) {
   return m.absorption.rgb;
 }
