@@ -423,3 +423,61 @@ TEST(RenderTexture, AlphaMaskCutsOutForEyeAndShadowRays) {
 
 } // namespace
 } // namespace vkray
+
+namespace vkray {
+namespace {
+
+// A glTF triangle facing +z (x, y in [-1, 1]), with COLOR_0 (normalized unsigned bytes) or without.
+fs::path colouredTriangle(bool withColors) {
+  fs::path dir = fs::temp_directory_path() / "vkray-texture-colours";
+  fs::create_directories(dir);
+  const float pos[9] = {-1, -1, 0, 1, -1, 0, 0, 1, 0};
+  const std::uint8_t rgba[12] = {255, 128, 64, 255, 255, 128, 64, 255, 255, 128, 64, 255};
+  std::ofstream(dir / "tri.bin", std::ios::binary)
+      .write(reinterpret_cast<const char*>(pos), sizeof pos)
+      .write(reinterpret_cast<const char*>(rgba), sizeof rgba);
+  std::string attributes = withColors ? R"({"POSITION": 0, "COLOR_0": 1})" : R"({"POSITION": 0})";
+  fs::path file = dir / (withColors ? "coloured.gltf" : "plain.gltf");
+  std::ofstream(file) << R"({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+    "meshes": [{"primitives": [{"attributes": )"
+                      << attributes << R"(}]}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
+      {"bufferView": 1, "componentType": 5121, "normalized": true, "count": 3, "type": "VEC4"}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 12}],
+    "buffers": [{"uri": "tri.bin", "byteLength": 48}]})";
+  return file;
+}
+
+TEST(TextureVertexColours, Color0IsReadAsNormalizedLinearRgba) {
+  Scene scene;
+  MeshRequest request;
+  request.file = colouredTriangle(true);
+  request.shownAs = "coloured.gltf";
+  importMesh(request, scene);
+  ASSERT_EQ(scene.triangles.size(), 1u);
+  ASSERT_TRUE(scene.triangles[0].colors.has_value());
+  EXPECT_DOUBLE_EQ((*scene.triangles[0].colors)[1].y, 128 / 255.0);
+  EXPECT_TRUE(analyzeScene(scene, scene.render).vertexColors);
+}
+
+// Vertex colours multiply the base colour: the coloured triangle is the plain one times the colour.
+TEST(RenderTextureVertexColours, MultiplyTheBaseColour) {
+  auto sceneFor = [](bool colours) {
+    return sceneFromJson(R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]},
+      "image": {"width": 16, "height": 16}, "ambient": [1, 1, 1],
+      "lights": [{"type": "point", "position": [0.5, 0.5, 3]}],
+      "objects": [{"type": "mesh", "file": ")" +
+                         colouredTriangle(colours).string() + R"("}]})");
+  };
+  Image coloured = render(sceneFor(true)).image;
+  Image plain = render(sceneFor(false)).image;
+  glm::vec3 c = coloured.at(8, 9), p = plain.at(8, 9);
+  ASSERT_GT(p.x, 0.05f);
+  EXPECT_NEAR(c.x, p.x * 1.0f, 1e-5f);
+  EXPECT_NEAR(c.y, p.y * (128 / 255.0f), 1e-5f);
+  EXPECT_NEAR(c.z, p.z * (64 / 255.0f), 1e-5f);
+}
+
+} // namespace
+} // namespace vkray

@@ -79,7 +79,9 @@ void orderByLeaves(GpuScene& g) {
       std::uint32_t uvBase = std::bit_cast<std::uint32_t>(t.v2.w);
       if (uvBase != 0) {
         t.v2.w = std::bit_cast<float>(static_cast<std::uint32_t>(texCoords.size()) + 1);
-        for (std::uint32_t k = 0; k < gpu::kUvRecordTexels; ++k) texCoords.push_back(g.texCoords[uvBase - 1 + k]);
+        bool colors = g.texCoords[uvBase - 1 + 3].z != 0.0f;
+        std::uint32_t n = gpu::kUvRecordTexels + (colors ? gpu::kUvRecordColorTexels : 0);
+        for (std::uint32_t k = 0; k < n; ++k) texCoords.push_back(g.texCoords[uvBase - 1 + k]);
       }
       std::uint32_t normalBase = std::bit_cast<std::uint32_t>(t.v1.w);
       if (normalBase != gpu::kNoNormals) {
@@ -211,9 +213,10 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
       for (const auto& n : *t.normals) g.normals.emplace_back(glm::vec3(n), 0.0f);
     }
     std::uint32_t uvBase = 0; // + 1; 0: none
-    if (t.uvs && textureRef[t.material] != 0) {
+    const bool textured = t.uvs && textureRef[t.material] != 0;
+    if (textured || t.colors) {
       uvBase = static_cast<std::uint32_t>(g.texCoords.size()) + 1;
-      for (const auto& uv : *t.uvs) g.texCoords.emplace_back(uv);
+      for (int k = 0; k < 3; ++k) g.texCoords.emplace_back(textured ? glm::vec4((*t.uvs)[k]) : glm::vec4(0.0f));
       // 0.5 log2(uv area / world area) per set: the triangle's part of the ray-cone LOD (RTG eq. 20.4).
       double world = glm::length(glm::cross(t.v[1] - t.v[0], t.v[2] - t.v[0]));
       auto uvArea = [&](int a) {
@@ -222,8 +225,12 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
         glm::dvec2 e1 = p1 - p0, e2 = p2 - p0;
         return std::abs(e1.x * e2.y - e1.y * e2.x);
       };
-      auto bias = [&](int a) { return static_cast<float>(0.5 * std::log2(std::max(uvArea(a), 1e-30) / world)); };
-      g.texCoords.emplace_back(bias(0), bias(2), 0.0f, 0.0f);
+      auto bias = [&](int a) {
+        return textured ? static_cast<float>(0.5 * std::log2(std::max(uvArea(a), 1e-30) / world)) : 0.0f;
+      };
+      g.texCoords.emplace_back(bias(0), bias(2), t.colors ? 1.0f : 0.0f, textured ? 1.0f : 0.0f);
+      if (t.colors)
+        for (const auto& c : *t.colors) g.texCoords.emplace_back(c);
     }
     g.triangles.push_back(gpu::Triangle{glm::vec4(rel(t.v[0], origin), std::bit_cast<float>(t.material)),
                                         glm::vec4(rel(t.v[1], origin), std::bit_cast<float>(normalBase)),

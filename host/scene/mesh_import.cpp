@@ -247,6 +247,11 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       for (int k = 0; k < 3; ++k) uvs[static_cast<std::size_t>(k)] = data.texcoords[face[static_cast<std::size_t>(k)]];
       t.uvs = uvs;
     }
+    if (data.colors.size() == data.positions.size()) {
+      std::array<glm::dvec4, 3> colors;
+      for (int k = 0; k < 3; ++k) colors[static_cast<std::size_t>(k)] = data.colors[face[static_cast<std::size_t>(k)]];
+      t.colors = colors;
+    }
     scene.triangles.push_back(t);
   }
   info.triangleCount = scene.triangles.size() - info.firstTriangle;

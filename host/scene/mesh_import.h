@@ -29,6 +29,8 @@ struct MeshData {
   std::vector<Material> materials;                       // named "file: material"
   // Texture coordinates per position (xy TEXCOORD_0, zw TEXCOORD_1); empty when the file has none.
   std::vector<glm::dvec4> texcoords;
+  // Vertex colours per position (linear RGBA); empty when the file has none.
+  std::vector<glm::dvec4> colors;
   // The textures materials' baseColorTexture indices refer to (appendMesh moves them to the scene).
   std::vector<std::shared_ptr<const Texture>> textures;
   std::optional<Camera> camera;   // the first camera, when asked for

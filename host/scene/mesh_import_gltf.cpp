@@ -80,6 +80,20 @@ struct AccessorView {
   int componentType = 0;
   bool normalized = false;
 
+  // Component k of element i: float, or normalized unsigned byte or short (TEXCOORD_n, COLOR_0).
+  double component(std::size_t i, int k) const {
+    const unsigned char* p = data + i * stride;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) return p[k] / 255.0;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+      std::uint16_t v;
+      std::memcpy(&v, p + 2 * k, sizeof v);
+      return v / 65535.0;
+    }
+    float f;
+    std::memcpy(&f, p + 4 * k, sizeof f);
+    return f;
+  }
+
   // A float, normalized unsigned byte or normalized unsigned short vec2 (TEXCOORD_n).
   glm::dvec2 vec2(std::size_t i) const {
     const unsigned char* p = data + i * stride;
@@ -492,6 +506,24 @@ private:
                std::to_string(positions.count) + " positions");
         }
       }
+      // COLOR_0: linear RGB or RGBA (glTF colours are linear), float or normalized integers.
+      std::optional<AccessorView> colors;
+      int colorComponents = 0;
+      if (auto col = prim.attributes.find("COLOR_0"); col != prim.attributes.end()) {
+        const int index = col->second;
+        bool rgba = index >= 0 && static_cast<std::size_t>(index) < model_.accessors.size() &&
+                    model_.accessors[static_cast<std::size_t>(index)].type == TINYGLTF_TYPE_VEC4;
+        colorComponents = rgba ? 4 : 3;
+        colors = view(index, where + " COLOR_0", rgba ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3,
+                      {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                       TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
+        if (colors->count != positions.count) {
+          fail(where + " has " + std::to_string(colors->count) + " COLOR_0 for " + std::to_string(positions.count) +
+               " positions");
+        }
+      }
+      const bool withColors = colors || !data_.colors.empty();
+      if (withColors) data_.colors.resize(data_.positions.size(), glm::dvec4(1.0));
       // Texture coordinates run parallel to the positions once some primitive has them.
       const bool withUvs = uvSets[0] || uvSets[1] || !data_.texcoords.empty();
       if (withUvs) data_.texcoords.resize(data_.positions.size());
@@ -513,6 +545,14 @@ private:
             fail(where + " TEXCOORD of vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
           }
           data_.texcoords.push_back(uv);
+        }
+        if (withColors) {
+          glm::dvec4 c(1.0);
+          for (int k = 0; k < colorComponents; ++k) c[k] = colors->component(i, k);
+          if (!(std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) && std::isfinite(c.w))) {
+            fail(where + " COLOR_0 of vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
+          }
+          data_.colors.push_back(glm::clamp(c, 0.0, 1e6));
         }
       }
 

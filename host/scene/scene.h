@@ -146,6 +146,8 @@ struct Triangle {
   std::optional<std::array<glm::dvec3, 3>> normals; // per-vertex shading normals, unit
   // Per-corner texture coordinates: xy set 0, zw set 1 (only for triangles of textured materials).
   std::optional<std::array<glm::dvec4, 3>> uvs;
+  // Per-corner vertex colours, linear RGBA (glTF COLOR_0), multiplying the base colour.
+  std::optional<std::array<glm::dvec4, 3>> colors;
   std::uint32_t material = 0;
 };
 

@@ -47,6 +47,7 @@ Surface surfaceAt(TraceRay r, Hit hit) {
   Surface s;
   s.kind = hit.kind;
   if (TEXTURES) s.hasUv = false;
+  if (VERTEX_COLORS) s.vertexColor = vec3(1.0);
   if (hit.kind == kPrimSphere) {
     Sphere sph = loadSphere(hit.index);
     sphereHitPoint(r.ray, hit.t, sphereCenter(sph), sphereRadius(sph), s.p, s.ng, s.errorBound);
@@ -65,12 +66,20 @@ Surface surfaceAt(TraceRay r, Hit hit) {
     }
     s.material = triangleMaterial(tri);
     uint uvBase = triangleUvBasePlusOne(tri);
-    if (TEXTURES && uvBase != 0u) {
+    if ((TEXTURES || VERTEX_COLORS) && uvBase != 0u) {
       int b = int(uvBase - 1u);
-      s.uv = hit.bary.x * texelFetch(texCoordTexels, b) + hit.bary.y * texelFetch(texCoordTexels, b + 1) +
-             hit.bary.z * texelFetch(texCoordTexels, b + 2);
-      s.uvLodBias = texelFetch(texCoordTexels, b + 3).xy;
-      s.hasUv = true;
+      vec4 flags = texelFetch(texCoordTexels, b + 3);
+      if (TEXTURES) {
+        s.uv = hit.bary.x * texelFetch(texCoordTexels, b) + hit.bary.y * texelFetch(texCoordTexels, b + 1) +
+               hit.bary.z * texelFetch(texCoordTexels, b + 2);
+        s.uvLodBias = flags.xy;
+        s.hasUv = flags.w != 0.0;
+      }
+      if (VERTEX_COLORS && flags.z != 0.0) {
+        s.vertexColor = hit.bary.x * texelFetch(texCoordTexels, b + 4).rgb +
+                        hit.bary.y * texelFetch(texCoordTexels, b + 5).rgb +
+                        hit.bary.z * texelFetch(texCoordTexels, b + 6).rgb;
+      }
     }
   } else if (hit.kind == kPrimPolygon) {
     Polygon poly = loadPolygon(hit.index);

@@ -97,6 +97,7 @@ vec3 untexturedBaseColor(Material mat, Surface s) {
 vec3 baseColor(Material mat, Surface s) {
   vec3 c = untexturedBaseColor(mat, s);
   if (TEXTURES) c *= baseColorTexel(mat, s).rgb;
+  if (VERTEX_COLORS) c *= s.vertexColor;
   return c;
 }
 

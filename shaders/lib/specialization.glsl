@@ -34,6 +34,7 @@ layout(constant_id = kSpecEntryPoints) const bool ENTRY_POINTS = false;
 layout(constant_id = kSpecTextures) const bool TEXTURES = false;
 layout(constant_id = kSpecTextureFilter) const uint TEXTURE_FILTER = kTextureCone;
 layout(constant_id = kSpecAlphaMask) const bool ALPHA_MASK = false;
+layout(constant_id = kSpecVertexColors) const bool VERTEX_COLORS = false;
 
 const bool ROBUST = NUMERICS == kNumericsRobust;
 

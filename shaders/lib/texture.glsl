@@ -96,7 +96,8 @@ bool alphaCutOut(uint index, vec3 bary) {
   float alpha = baseAlpha(m);
   uint ref = textureRefPlusOne(m);
   uint uvBase = triangleUvBasePlusOne(tri);
-  if (TEXTURES && cutoff > 0.0 && ref != 0u && uvBase != 0u) {
+  if (TEXTURES && cutoff > 0.0 && ref != 0u && uvBase != 0u &&
+      texelFetch(texCoordTexels, int(uvBase - 1u) + 3).w != 0.0) {
     int b = int(uvBase - 1u);
     vec4 uvs = bary.x * texelFetch(texCoordTexels, b) + bary.y * texelFetch(texCoordTexels, b + 1) +
                bary.z * texelFetch(texCoordTexels, b + 2);

@@ -107,7 +107,9 @@ VKRAY_CONST(uint, kSpecTextures, 27u);
 VKRAY_CONST(uint, kSpecTextureFilter, 28u); // kTextureNearest / kTextureBilinear / kTextureCone
 // Some triangle's material is glTF alphaMode MASK: the triangle test skips cut-out hits.
 VKRAY_CONST(uint, kSpecAlphaMask, 29u);
-VKRAY_CONST(uint, kSpecCount, 30u);
+// Some triangle has vertex colours (glTF COLOR_0).
+VKRAY_CONST(uint, kSpecVertexColors, 30u);
+VKRAY_CONST(uint, kSpecCount, 31u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -126,9 +128,12 @@ VKRAY_CONST(uint, kTextureCone, 2u);     // trilinear between the levels a ray c
 // then floatBits(uv transform row 0, lod offset) and floatBits(row 1, 0); the lod offset is
 // 0.5 log2(width * height * |det(transform)|) of level 0. A level record is (first texel in
 // Texels, width, height, 0). A textured triangle's uv record is 4 RGBA32F texels of TexCoords: its
-// corners (xy set 0, zw set 1), then (0.5 log2(uv area / world area) for set 0 and set 1, 0, 0).
+// corners (xy set 0, zw set 1), then (0.5 log2(uv area / world area) for set 0 and set 1, colours,
+// uvs): `uvs` 1 when the corners hold texture coordinates, `colours` 1 when 3 more texels follow
+// with the corners' vertex colours (linear RGBA; glTF COLOR_0), which multiply the base colour.
 VKRAY_CONST(uint, kTextureRefTexels, 3u);
-VKRAY_CONST(uint, kUvRecordTexels, 4u);
+VKRAY_CONST(uint, kUvRecordTexels, 4u);      // without vertex colours
+VKRAY_CONST(uint, kUvRecordColorTexels, 3u); // the vertex colours after them
 VKRAY_CONST(uint, kWrapRepeat, 0u);
 VKRAY_CONST(uint, kWrapClamp, 1u);
 VKRAY_CONST(uint, kWrapMirror, 2u);
