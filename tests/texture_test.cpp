@@ -481,3 +481,37 @@ TEST(RenderTextureVertexColours, MultiplyTheBaseColour) {
 
 } // namespace
 } // namespace vkray
+
+namespace vkray {
+namespace {
+
+// OBJ map_Kd: the MTL's image becomes the material's texture; vt's v (up) becomes uv's v (down).
+TEST(TextureObj, MapKdTexturesTheMaterialWithFlippedV) {
+  fs::path dir = fs::temp_directory_path() / "vkray-texture-obj";
+  fs::create_directories(dir);
+  fs::copy_file(fs::path(VKRAY_SOURCE_DIR) / "scenes/meshes/tiles.png", dir / "tiles.png",
+                fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "quad.mtl") << "newmtl tiled\nKd 1 1 1\nmap_Kd tiles.png\n";
+  std::ofstream(dir / "lost.mtl") << "newmtl lost\nmap_Kd nowhere.png\n";
+  std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                     "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl tiled\nf 1/1 2/2 3/3 4/4\n";
+  std::ofstream(dir / "lost.obj") << "mtllib lost.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nusemtl lost\nf 1 2 3\n";
+  Scene scene;
+  MeshRequest request;
+  request.file = dir / "quad.obj";
+  request.shownAs = "quad.obj";
+  importMesh(request, scene);
+  ASSERT_EQ(scene.textures.size(), 1u);
+  EXPECT_EQ(scene.textures[0]->levels[0].width, 64u);
+  ASSERT_EQ(scene.triangles.size(), 2u);
+  ASSERT_TRUE(scene.triangles[0].uvs.has_value());
+  EXPECT_EQ((*scene.triangles[0].uvs)[0], glm::dvec4(0, 1, 0, 0)); // vt 0 0: the image's bottom-left
+  EXPECT_EQ((*scene.triangles[0].uvs)[2], glm::dvec4(1, 0, 0, 0));
+  EXPECT_TRUE(analyzeScene(scene, scene.render).textures);
+  request.file = dir / "lost.obj";
+  std::string error = importError(request.file);
+  EXPECT_NE(error.find("nowhere.png: texture file not found"), std::string::npos) << error;
+}
+
+} // namespace
+} // namespace vkray

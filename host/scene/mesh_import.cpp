@@ -108,6 +108,7 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
   }
   if (!data.faceNormals.empty() && data.faceNormals.size() != faceCount) throw Error(where + ": face normal count");
   if (!data.faceMaterials.empty() && data.faceMaterials.size() != faceCount) throw Error(where + ": material count");
+  if (!data.faceTexcoords.empty() && data.faceTexcoords.size() != faceCount) throw Error(where + ": texcoord count");
 
   // Positions to world space, checked where a face uses them.
   const glm::dmat4& m = request.worldFromMesh;
@@ -242,7 +243,11 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       t.normals = ns;
     }
     t.material = materialOf(f);
-    if (scene.materials[t.material].baseColorTexture && data.texcoords.size() == data.positions.size()) {
+    if (scene.materials[t.material].baseColorTexture && !data.faceTexcoords.empty()) {
+      const auto& ft = data.faceTexcoords[f];
+      if (ft[0] < data.texcoords.size() && ft[1] < data.texcoords.size() && ft[2] < data.texcoords.size())
+        t.uvs = std::array<glm::dvec4, 3>{data.texcoords[ft[0]], data.texcoords[ft[1]], data.texcoords[ft[2]]};
+    } else if (scene.materials[t.material].baseColorTexture && data.texcoords.size() == data.positions.size()) {
       std::array<glm::dvec4, 3> uvs;
       for (int k = 0; k < 3; ++k) uvs[static_cast<std::size_t>(k)] = data.texcoords[face[static_cast<std::size_t>(k)]];
       t.uvs = uvs;

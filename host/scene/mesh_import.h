@@ -29,6 +29,9 @@ struct MeshData {
   std::vector<Material> materials;                       // named "file: material"
   // Texture coordinates per position (xy TEXCOORD_0, zw TEXCOORD_1); empty when the file has none.
   std::vector<glm::dvec4> texcoords;
+  // Per face, the corners' indices into texcoords (kNone: none), for formats that index texture
+  // coordinates apart from positions (OBJ); empty: texcoords run parallel to positions.
+  std::vector<std::array<std::uint32_t, 3>> faceTexcoords;
   // Vertex colours per position (linear RGBA); empty when the file has none.
   std::vector<glm::dvec4> colors;
   // The textures materials' baseColorTexture indices refer to (appendMesh moves them to the scene).
