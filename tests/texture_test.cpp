@@ -18,6 +18,7 @@
 #include "image/image_io.h"
 #include "image/metrics.h"
 #include "render/gpu_scene.h"
+#include "render/kernel_variants.h"
 #include "scene/features.h"
 #include "scene/mesh_import.h"
 #include "scene/scene_loader.h"
@@ -511,6 +512,30 @@ TEST(TextureObj, MapKdTexturesTheMaterialWithFlippedV) {
   request.file = dir / "lost.obj";
   std::string error = importError(request.file);
   EXPECT_NE(error.find("nowhere.png: texture file not found"), std::string::npos) << error;
+}
+
+} // namespace
+} // namespace vkray
+
+namespace vkray {
+namespace {
+
+// Every bundled scene but the textured one gets the kernel without texture code: TEXTURES,
+// VERTEX_COLORS and ALPHA_MASK are off (tools/compare-renders and tools/count-jit-instructions
+// show those kernels unchanged); scenes/textured.json gets TEXTURES.
+TEST(TextureSpecialization, OnlyTheTexturedSceneCompilesTextureCode) {
+  for (const auto& entry : fs::directory_iterator(fs::path(VKRAY_SOURCE_DIR) / "scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().string());
+    Scene scene = loadScene(entry.path());
+    Features f = analyzeScene(scene, scene.render);
+    vulkan::Specialization spec =
+        specializationFor(f, scene.render, RenderOptions{}, SceneShape{}, SceneMemoryUse{}, false, false);
+    bool textured = entry.path().filename() == "textured.json";
+    EXPECT_EQ(spec.values().at(gpu::kSpecTextures), textured ? 1u : 0u);
+    EXPECT_EQ(spec.values().at(gpu::kSpecVertexColors), 0u);
+    EXPECT_EQ(spec.values().at(gpu::kSpecAlphaMask), 0u);
+  }
 }
 
 } // namespace
