@@ -61,6 +61,12 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   PendingRay stack[STACK_SIZE];
   int sp = 0;
   PendingRay cur = PendingRay(origin, kRayEye << 16u, dir, vec3(1.0), kEmptyMedia);
+  // TEXTURES: the ray cone (Ray Tracing Gems ch. 20) as the distance the tree has travelled to the
+  // current ray's origin: the eye ray's spread angle is kept through reflections and refractions
+  // (flat surfaces; the curvature of spheres is left out), so the cone's width at a hit is the
+  // spread times the whole path. Outside PendingRay, so without TEXTURES nothing of it is compiled.
+  float travelled = 0.0;
+  float travelledStack[STACK_SIZE];
   uint maxDepth = opaqueUniform(frame.maxDepth);
   // The loop's own exit leaves nothing pending. llvmpipe ends every loop of an invocation once its
   // SIMD group has run 65535 loop iterations in all; a glass tree cut short that way still has its
@@ -86,6 +92,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
       bool front = dot(s.ng, cur.dir) < 0.0;
       vec3 ngf = front ? s.ng : -s.ng;
       vec3 nsf = front ? s.ns : -s.ns;
+      if (TEXTURES) gConeFootprint = frame.coneSpread * (travelled + hit.t) / max(abs(dot(s.ng, cur.dir)), 1e-6);
       radiance += w * localShade(mat, s, ngf, nsf, cur.dir);
 
       if ((REFLECTION || REFRACTION) && depth < maxDepth) {
@@ -132,6 +139,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           vec3 to = ROBUST ? spawnOrigin(s.p, -ngf, s.errorBound) : s.p;
           if (doR) {
             if (sp < STACK_SIZE) {
+              if (TEXTURES) travelledStack[sp] = travelled + hit.t;
               stack[sp++] = reflected;
             } else if (COUNT_STATS) {
               gCount.stackOverflow++;
@@ -143,11 +151,13 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           cur = reflected;
           haveNext = true;
         }
+        if (TEXTURES) travelled += hit.t;
       }
     }
     if (!haveNext) {
       // Without refraction nothing is ever pushed: the stack code compiles out.
       if (!REFRACTION || sp == 0) break;
+      if (TEXTURES) travelled = travelledStack[sp - 1];
       cur = stack[--sp];
       haveNext = true;
     }

@@ -448,6 +448,8 @@ TEST(HardeningFuzz, FindingsStayFixed) {
         request.shownAs = "fuzz.ply";
         Scene scene;
         importMesh(request, scene);
+      } else if (target == "texture") {
+        decodeTextureData(bytes, "fuzz.png");
       } else {
         // obj and gltf inputs: the file, then optionally "#---companion---" and its MTL or .bin.
         const std::string marker = "\n#---companion---\n";

@@ -249,7 +249,7 @@ void expectSameMesh(const MeshData& a, const MeshData& b) {
   EXPECT_EQ(a.faces, b.faces);
   EXPECT_EQ(a.faceNormals, b.faceNormals);
   EXPECT_EQ(a.texcoords, b.texcoords);
-  EXPECT_EQ(a.vertexColors, b.vertexColors);
+  EXPECT_EQ(a.colors, b.colors);
 }
 
 // ---- Encodings -------------------------------------------------------------------------------------
@@ -271,12 +271,12 @@ TEST_F(PlyImport, TheThreeEncodingsGiveTheSameMesh) {
   ASSERT_EQ(mesh.positions, m.positions);
   ASSERT_EQ(mesh.normals.size(), m.positions.size());
   ASSERT_EQ(mesh.texcoords.size(), m.positions.size());
-  ASSERT_EQ(mesh.vertexColors.size(), m.positions.size());
+  ASSERT_EQ(mesh.colors.size(), m.positions.size());
   for (std::size_t i = 0; i < m.positions.size(); ++i) {
     EXPECT_EQ(mesh.normals[i], m.normal(i));
-    EXPECT_EQ(mesh.texcoords[i], m.uv(i));
+    EXPECT_EQ(mesh.texcoords[i], glm::dvec4(m.uv(i).x, 1.0 - m.uv(i).y, 0.0, 0.0)) << "v flipped to glTF's down";
     for (int c = 0; c < 3; ++c) {
-      EXPECT_EQ(mesh.vertexColors[i][c], srgbToLinear(static_cast<float>(m.color(i, c)) / 255.0f));
+      EXPECT_EQ(mesh.colors[i][c], double(srgbToLinear(static_cast<float>(m.color(i, c)) / 255.0f)));
     }
   }
   // Quads split as fans, the concave pentagon (reflex at corner 3) by ear clipping: 2+2+2+1+1+3.
@@ -370,11 +370,11 @@ TEST_F(PlyImport, TextureCoordinateSpellingsAndColourTypes) {
     PlyElement face{"face", {{"uint", "vertex_indices", "uchar"}}, {{{0, 1, 2}}}};
     MeshData mesh = read(write("uv.ply", writePly({vertex, face}, Encoding::Ascii)));
     ASSERT_EQ(mesh.texcoords.size(), 3u);
-    EXPECT_EQ(mesh.texcoords[0], glm::vec2(0.25f, 0.75f));
-    EXPECT_EQ(mesh.texcoords[1], glm::vec2(0.5f, 1.0f));
-    ASSERT_EQ(mesh.vertexColors.size(), 3u);
-    EXPECT_EQ(mesh.vertexColors[0], glm::vec3(0.0f, srgbToLinear(0.5f), 1.0f));
-    EXPECT_EQ(mesh.vertexColors[1], glm::vec3(1.0f, 0.0f, 0.04f / 12.92f)) << "clamped to 0..1; the linear segment";
+    EXPECT_EQ(mesh.texcoords[0], glm::dvec4(0.25, 0.25, 0.0, 0.0));
+    EXPECT_EQ(mesh.texcoords[1], glm::dvec4(0.5, 0.0, 0.0, 0.0));
+    ASSERT_EQ(mesh.colors.size(), 3u);
+    EXPECT_EQ(mesh.colors[0], glm::dvec4(0.0, srgbToLinear(0.5f), 1.0, 1.0));
+    EXPECT_EQ(mesh.colors[1], glm::dvec4(1.0, 0.0, 0.04f / 12.92f, 1.0)) << "clamped to 0..1; the linear segment";
   }
   PlyElement vertex{
       "vertex",
@@ -387,8 +387,8 @@ TEST_F(PlyImport, TextureCoordinateSpellingsAndColourTypes) {
       {{{0}, {0}, {0}, {0}, {65535}, {32768}}, {{1}, {0}, {0}, {0}, {0}, {0}}, {{0}, {1}, {0}, {0}, {0}, {0}}}};
   PlyElement face{"face", {{"uint", "vertex_indices", "uchar"}}, {{{0, 1, 2}}}};
   MeshData mesh = read(write("ushort.ply", writePly({vertex, face}, Encoding::Little)));
-  ASSERT_EQ(mesh.vertexColors.size(), 3u);
-  EXPECT_EQ(mesh.vertexColors[0], glm::vec3(0.0f, 1.0f, srgbToLinear(static_cast<float>(32768.0 / 65535.0))));
+  ASSERT_EQ(mesh.colors.size(), 3u);
+  EXPECT_EQ(mesh.colors[0], glm::dvec4(0.0, 1.0, srgbToLinear(static_cast<float>(32768.0 / 65535.0)), 1.0));
   EXPECT_TRUE(mesh.normals.empty());
   EXPECT_TRUE(mesh.faceNormals.empty());
 }

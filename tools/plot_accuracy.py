@@ -27,6 +27,7 @@ KNOB_STYLE = {
     "numerics": ("tab:red", "D"),
     "precision": ("tab:purple", "P"),
     "fresnel": ("tab:brown", "X"),
+    "texture_filter": ("tab:olive", "P"),
     "combined": ("tab:gray", "h"),
 }
 

@@ -89,6 +89,10 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
   addEnum("numerics", Numerics::Naive, &RenderSettings::numerics);
   addEnum("numerics", Numerics::Robust, &RenderSettings::numerics);
   if (float64) addEnum("precision", Precision::Float64, &RenderSettings::precision);
+  if (f.textures) {
+    for (TextureFilter t : {TextureFilter::Nearest, TextureFilter::Bilinear, TextureFilter::Cone})
+      addEnum("texture_filter", t, &RenderSettings::textureFilter);
+  }
   if (f.anyTransmissiveMaterial) {
     addEnum("fresnel", FresnelMode::Schlick, &RenderSettings::fresnel);
     addEnum("fresnel", FresnelMode::Exact, &RenderSettings::fresnel);
@@ -121,9 +125,10 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
 int runBenchAccuracy(const BenchAccuracyArgs& args) {
   std::vector<std::filesystem::path> scenes = args.scenes;
   if (scenes.empty()) {
-    // The three looks, then two hard cases where naive numerics go wrong (docs/numerics.md).
-    for (const char* name :
-         {"showcase.json", "glass.json", "seed.json", "numerics-cracks.json", "numerics-far-sphere.json"}) {
+    // The three looks, then two hard cases where naive numerics go wrong (docs/numerics.md), then
+    // textures (the texture_filter points).
+    for (const char* name : {"showcase.json", "glass.json", "seed.json", "numerics-cracks.json",
+                             "numerics-far-sphere.json", "textured.json"}) {
       scenes.push_back(std::filesystem::path(VKRAY_SCENES_DIR) / name);
       if (args.quick) break;
     }
@@ -175,6 +180,7 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     ref.spp = refSpp;
     ref.numerics = Numerics::Robust;
     ref.fresnel = FresnelMode::Exact;
+    ref.textureFilter = TextureFilter::Nearest; // point samples: their mean is the filtered texture
     ref.precision = float64 ? Precision::Float64 : Precision::Float32;
     RenderOptions counted = options;
     counted.countStats = true;

@@ -74,6 +74,9 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(CLI::IsMember(enumNameList<Precision>()));
   app.add_option("--bvh", f.bvh, "acceleration structure: auto, on or off")
       ->check(CLI::IsMember(enumNameList<BvhMode>()));
+  app.add_option("--texture-filter", f.textureFilter,
+                 "texture sampling: nearest, bilinear, or cone (mip level from a ray cone; default)")
+      ->check(CLI::IsMember(enumNameList<TextureFilter>()));
 }
 
 void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
@@ -89,6 +92,7 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
   if (f.transmissiveShadows) s.transmissiveShadows = *parseEnum<TransmissiveShadows>(*f.transmissiveShadows);
   if (f.precision) s.precision = *parseEnum<Precision>(*f.precision);
   if (f.bvh) s.bvh = *parseEnum<BvhMode>(*f.bvh);
+  if (f.textureFilter) s.textureFilter = *parseEnum<TextureFilter>(*f.textureFilter);
 }
 
 void addModelFlags(CLI::App& app, ModelFlags& f) {

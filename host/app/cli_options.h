@@ -19,7 +19,7 @@ struct RenderFlags {
   std::optional<std::uint32_t> width, height;
   std::optional<int> maxDepth, spp;
   std::optional<double> bailout, adaptiveThreshold;
-  std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision;
+  std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision, textureFilter;
 };
 
 // How a model file (.obj, .gltf, .glb) given in place of a scene is staged.

@@ -24,7 +24,8 @@ bool isUniformBinding(std::uint32_t b) {
 bool isTexelBinding(std::uint32_t b) {
   return b == gpu::kBindingTriangles || b == gpu::kBindingNormals || b == gpu::kBindingBvhNodes ||
          b == gpu::kBindingPrimRefs || b == gpu::kBindingEntryTexels || b == gpu::kBindingImage ||
-         b == gpu::kBindingPrevImage;
+         b == gpu::kBindingPrevImage || b == gpu::kBindingTexCoords || b == gpu::kBindingTextureInfo ||
+         b == gpu::kBindingTexels;
 }
 
 vk::DescriptorType descriptorType(std::uint32_t b) {

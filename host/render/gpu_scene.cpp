@@ -66,6 +66,8 @@ void orderByLeaves(GpuScene& g) {
   std::vector<gpu::Polygon> polygons(g.polygons.size());
   std::vector<glm::vec4> normals;
   normals.reserve(g.normals.size());
+  std::vector<glm::vec4> texCoords;
+  texCoords.reserve(g.texCoords.size());
   for (std::uint32_t& ref : g.bvh.primRefs) {
     std::uint32_t kind = ref >> gpu::kPrimKindShift;
     std::uint32_t index = ref & gpu::kPrimIndexMask;
@@ -74,6 +76,13 @@ void orderByLeaves(GpuScene& g) {
       spheres[slot] = g.spheres[index];
     } else if (kind == gpu::kPrimTriangle) {
       gpu::Triangle t = g.triangles[index];
+      std::uint32_t uvBase = std::bit_cast<std::uint32_t>(t.v2.w);
+      if (uvBase != 0) {
+        t.v2.w = std::bit_cast<float>(static_cast<std::uint32_t>(texCoords.size()) + 1);
+        bool colors = g.texCoords[uvBase - 1 + 3].z != 0.0f;
+        std::uint32_t n = gpu::kUvRecordTexels + (colors ? gpu::kUvRecordColorTexels : 0);
+        for (std::uint32_t k = 0; k < n; ++k) texCoords.push_back(g.texCoords[uvBase - 1 + k]);
+      }
       std::uint32_t normalBase = std::bit_cast<std::uint32_t>(t.v1.w);
       if (normalBase != gpu::kNoNormals) {
         // The shading normals move with their triangle, so a leaf's data stays together.
@@ -90,6 +99,7 @@ void orderByLeaves(GpuScene& g) {
   g.triangles = std::move(triangles);
   g.polygons = std::move(polygons);
   g.normals = std::move(normals);
+  g.texCoords = std::move(texCoords);
 }
 
 std::size_t GpuScene::bvhBytes() const {
@@ -97,14 +107,16 @@ std::size_t GpuScene::bvhBytes() const {
 }
 
 std::size_t GpuScene::meshBytes() const {
-  return triangles.size() * sizeof(gpu::Triangle) + normals.size() * sizeof(glm::vec4) + bvhBytes();
+  return triangles.size() * sizeof(gpu::Triangle) + (normals.size() + texCoords.size()) * sizeof(glm::vec4) +
+         bvhBytes();
 }
 
 std::size_t GpuScene::bytes() const {
   return materials.size() * sizeof(gpu::Material) + lights.size() * sizeof(gpu::Light) +
          spheres.size() * sizeof(gpu::Sphere) + planes.size() * sizeof(gpu::Plane) +
          triangles.size() * sizeof(gpu::Triangle) + polygons.size() * sizeof(gpu::Polygon) +
-         (polyVertices.size() + normals.size()) * sizeof(glm::vec4) + bvhBytes();
+         (polyVertices.size() + normals.size() + texCoords.size() + texels.size()) * sizeof(glm::vec4) +
+         textureInfo.size() * sizeof(glm::uvec4) + bvhBytes();
 }
 
 GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, const BvhOptions& bvhOptions) {
@@ -112,15 +124,57 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
   g.origin = origin;
   g.background = scene.background;
   g.ambientLight = scene.ambientLight;
-  for (const Material& m : scene.materials) {
+  // Textures: each level's texels, then one reference per textured material (its texture's levels,
+  // wrap modes, uv set and transform), then the level records the references point at.
+  std::vector<std::uint32_t> firstLevel;
+  std::vector<glm::uvec4> levels;
+  for (const auto& tex : scene.textures) {
+    firstLevel.push_back(static_cast<std::uint32_t>(levels.size()));
+    for (const TextureLevel& l : tex->levels) {
+      levels.emplace_back(static_cast<std::uint32_t>(g.texels.size()), l.width, l.height, 0u);
+      g.texels.insert(g.texels.end(), l.texels.begin(), l.texels.end());
+    }
+  }
+  std::vector<std::uint32_t> textureRef(scene.materials.size(), 0); // + 1; 0: untextured
+  std::vector<glm::uvec4> refs;
+  for (std::size_t i = 0; i < scene.materials.size(); ++i) {
+    const auto& bt = scene.materials[i].baseColorTexture;
+    if (!bt) continue;
+    const Texture& tex = *scene.textures[bt->texture];
+    textureRef[i] = static_cast<std::uint32_t>(refs.size() / gpu::kTextureRefTexels) + 1;
+    const TextureTransform& x = bt->transform;
+    double c = std::cos(x.rotation), s = std::sin(x.rotation);
+    // uv' = T R S uv as rows (a b e; c d f), as texture.h's TextureTransform::apply.
+    glm::dvec3 row0(c * x.scale.x, s * x.scale.y, x.offset.x);
+    glm::dvec3 row1(-s * x.scale.x, c * x.scale.y, x.offset.y);
+    double det = std::abs(row0.x * row1.y - row0.y * row1.x);
+    double texels = double(tex.levels[0].width) * tex.levels[0].height * std::max(det, 1e-30);
+    auto bits = [](double v) { return std::bit_cast<std::uint32_t>(static_cast<float>(v)); };
+    std::uint32_t wrap =
+        static_cast<std::uint32_t>(tex.wrapS) | static_cast<std::uint32_t>(tex.wrapT) << 2 | (tex.nearest ? 16u : 0u);
+    refs.emplace_back(firstLevel[bt->texture], static_cast<std::uint32_t>(tex.levels.size()), wrap, bt->texCoord);
+    refs.emplace_back(bits(row0.x), bits(row0.y), bits(row0.z), bits(0.5 * std::log2(texels)));
+    refs.emplace_back(bits(row1.x), bits(row1.y), bits(row1.z), 0u);
+  }
+  if (!refs.empty()) {
+    auto levelBase = static_cast<std::uint32_t>(refs.size());
+    for (std::size_t r = 0; r < refs.size(); r += gpu::kTextureRefTexels) refs[r].x += levelBase;
+    g.textureInfo = std::move(refs);
+    g.textureInfo.insert(g.textureInfo.end(), levels.begin(), levels.end());
+  } else {
+    g.texels.clear();
+  }
+  for (std::size_t mi = 0; mi < scene.materials.size(); ++mi) {
+    const Material& m = scene.materials[mi];
     gpu::Material gm{};
     gm.color = glm::vec4(glm::vec3(m.color), static_cast<float>(m.ambient));
     gm.color2 =
         m.checker ? glm::vec4(glm::vec3(m.checker->color2), static_cast<float>(m.checker->scale)) : glm::vec4(0.0f);
     gm.phong = glm::vec4(static_cast<float>(m.diffuse), static_cast<float>(m.specular), static_cast<float>(m.shininess),
                          static_cast<float>(m.reflection));
-    gm.transmission = glm::vec4(static_cast<float>(m.transmission), static_cast<float>(m.ior), 0.0f, 0.0f);
-    gm.absorption = glm::vec4(glm::vec3(m.absorption), 0.0f);
+    gm.transmission = glm::vec4(static_cast<float>(m.transmission), static_cast<float>(m.ior),
+                                std::bit_cast<float>(textureRef[mi]), static_cast<float>(m.alphaCutoff));
+    gm.absorption = glm::vec4(glm::vec3(m.absorption), m.alphaCutoff > 0.0 ? static_cast<float>(m.alpha) : 0.0f);
     g.materials.push_back(gm);
   }
   for (const PointLight& l : scene.lights) {
@@ -158,9 +212,29 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
       normalBase = static_cast<std::uint32_t>(g.normals.size());
       for (const auto& n : *t.normals) g.normals.emplace_back(glm::vec3(n), 0.0f);
     }
+    std::uint32_t uvBase = 0; // + 1; 0: none
+    const bool textured = t.uvs && textureRef[t.material] != 0;
+    if (textured || t.colors) {
+      uvBase = static_cast<std::uint32_t>(g.texCoords.size()) + 1;
+      for (int k = 0; k < 3; ++k) g.texCoords.emplace_back(textured ? glm::vec4((*t.uvs)[k]) : glm::vec4(0.0f));
+      // 0.5 log2(uv area / world area) per set: the triangle's part of the ray-cone LOD (RTG eq. 20.4).
+      double world = glm::length(glm::cross(t.v[1] - t.v[0], t.v[2] - t.v[0]));
+      auto uvArea = [&](int a) {
+        glm::dvec2 p0((*t.uvs)[0][a], (*t.uvs)[0][a + 1]), p1((*t.uvs)[1][a], (*t.uvs)[1][a + 1]),
+            p2((*t.uvs)[2][a], (*t.uvs)[2][a + 1]);
+        glm::dvec2 e1 = p1 - p0, e2 = p2 - p0;
+        return std::abs(e1.x * e2.y - e1.y * e2.x);
+      };
+      auto bias = [&](int a) {
+        return textured ? static_cast<float>(0.5 * std::log2(std::max(uvArea(a), 1e-30) / world)) : 0.0f;
+      };
+      g.texCoords.emplace_back(bias(0), bias(2), t.colors ? 1.0f : 0.0f, textured ? 1.0f : 0.0f);
+      if (t.colors)
+        for (const auto& c : *t.colors) g.texCoords.emplace_back(c);
+    }
     g.triangles.push_back(gpu::Triangle{glm::vec4(rel(t.v[0], origin), std::bit_cast<float>(t.material)),
                                         glm::vec4(rel(t.v[1], origin), std::bit_cast<float>(normalBase)),
-                                        glm::vec4(rel(t.v[2], origin), 0.0f)});
+                                        glm::vec4(rel(t.v[2], origin), std::bit_cast<float>(uvBase))});
   }
 
   const std::vector<BvhPrimitive> prims = bvhPrimitives(scene, g);

@@ -27,6 +27,11 @@ struct GpuScene {
   std::vector<gpu::Polygon> polygons;
   std::vector<glm::vec4> polyVertices;
   std::vector<glm::vec4> normals;
+  // Textures (layouts in gpu_types.h): uv records of textured triangles, texture references and
+  // level records, and every level's texels. Empty for scenes without textures.
+  std::vector<glm::vec4> texCoords;
+  std::vector<glm::uvec4> textureInfo;
+  std::vector<glm::vec4> texels;
   // A box holding every sphere, triangle and polygon of the packed scene, in float and conservative
   // (the union of bvhPrimitives' boxes); empty when there are none. Eye-ray culling uses it
   // (render/row_culling.h).

@@ -47,6 +47,10 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecShadowMode, attenuate ? gpu::kShadowsAttenuated : gpu::kShadowsOpaque);
   spec.set(gpu::kSpecChecker, all || f.checker);
   spec.set(gpu::kSpecSmoothNormals, all || f.smoothNormals);
+  spec.set(gpu::kSpecTextures, all || f.textures);
+  spec.set(gpu::kSpecAlphaMask, all || f.alphaMask);
+  spec.set(gpu::kSpecVertexColors, all || f.vertexColors);
+  spec.set(gpu::kSpecTextureFilter, static_cast<std::uint32_t>(s.textureFilter));
   spec.set(gpu::kSpecSceneInUbo, memory.scene);
   spec.set(gpu::kSpecShadingInUbo, memory.shading);
   spec.set(gpu::kSpecCenterSample, centerSample);

@@ -80,7 +80,7 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
         vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 4),
         vk::DescriptorPoolSize(vk::DescriptorType::eUniformBuffer, 2),
         vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, gpu::kBindingCount),
-        vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, 5)};
+        vk::DescriptorPoolSize(vk::DescriptorType::eUniformTexelBuffer, 8)};
     descriptorPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
@@ -307,6 +307,8 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.ambientLight = glm::vec4(glm::vec3(g.ambientLight), 0.0f);
   p.bailout = static_cast<float>(s.bailout);
   p.adaptiveThreshold = static_cast<float>(s.adaptiveThreshold);
+  // A pixel's angle (RTG ch. 20, eq. 20.30: atan(2 tan(fov / 2) / height)), the eye rays' cone.
+  p.coneSpread = static_cast<float>(std::atan(2.0 * cam.tanHalfFovY / s.height));
   p.imageSize = glm::uvec2(s.width, s.height);
   // Depth beyond what the weights can reach changes nothing; the specialized kernel stops there.
   p.maxDepth = static_cast<std::uint32_t>(f.reflection ? f.usableDepth : 0);

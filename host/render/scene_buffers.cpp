@@ -50,6 +50,11 @@ void SceneBuffers::upload(const GpuScene& g) {
   uploadArray(buffers_[gpu::kBindingPolygons], context_, g.polygons, "polygons");
   uploadArray(buffers_[gpu::kBindingPolyVertices], context_, g.polyVertices, "polygon vertices");
   uploadTexels(buffers_[gpu::kBindingNormals], context_, g.normals, vk::Format::eR32G32B32A32Sfloat, "shading normals");
+  uploadTexels(buffers_[gpu::kBindingTexCoords], context_, g.texCoords, vk::Format::eR32G32B32A32Sfloat,
+               "texture coordinates");
+  uploadTexels(buffers_[gpu::kBindingTextureInfo], context_, g.textureInfo, vk::Format::eR32G32B32A32Uint,
+               "texture records");
+  uploadTexels(buffers_[gpu::kBindingTexels], context_, g.texels, vk::Format::eR32G32B32A32Sfloat, "textures");
   uploadTexels(buffers_[gpu::kBindingBvhNodes], context_, g.bvhNodes, vk::Format::eR32G32B32A32Uint, "BVH nodes");
   uploadTexels(buffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, vk::Format::eR32Uint,
                "BVH primitive references");

@@ -74,6 +74,13 @@ Features analyzeScene(const Scene& scene, const RenderSettings& settings) {
   f.polygons = !scene.polygons.empty();
   f.smoothNormals = std::any_of(scene.triangles.begin(), scene.triangles.end(),
                                 [](const Triangle& t) { return t.normals.has_value(); });
+  f.textures = std::any_of(scene.triangles.begin(), scene.triangles.end(), [&](const Triangle& t) {
+    return t.uvs.has_value() && scene.materials[t.material].baseColorTexture.has_value();
+  });
+  f.vertexColors = std::any_of(scene.triangles.begin(), scene.triangles.end(),
+                               [](const Triangle& t) { return t.colors.has_value(); });
+  f.alphaMask = std::any_of(scene.triangles.begin(), scene.triangles.end(),
+                            [&](const Triangle& t) { return scene.materials[t.material].alphaCutoff > 0.0; });
   for (const Material& m : scene.materials) {
     if (m.checker) f.checker = true;
     if (m.reflection > 0.0) f.anyReflectiveMaterial = true;
@@ -131,6 +138,10 @@ std::vector<std::string> Features::explain() const {
   add(triangles, smoothNormals ? "triangles (smooth normals)" : "triangles");
   lines.push_back("primitives: " + (prims.empty() ? std::string("none") : prims) +
                   " (code for absent kinds is compiled out)");
+  // Said only when on: a scene without textures explains itself as before.
+  if (textures) lines.push_back("textures: on (base-colour textures on triangles; sampling compiled in)");
+  if (vertexColors) lines.push_back("vertex colours: on (they multiply the base colour)");
+  if (alphaMask) lines.push_back("alpha mask: on (cut-out triangles, for shadow rays too)");
 
   if (shadows) {
     std::string line = "shadows: on (" + plural(static_cast<std::size_t>(shadowLights), "light") + ")";

@@ -18,6 +18,9 @@ struct Features {
   bool polygons = false;
   bool smoothNormals = false; // some triangle carries shading normals
   bool checker = false;       // some material has a checker
+  bool textures = false;      // some material has a base-colour texture and some triangle uvs for it
+  bool vertexColors = false;  // some triangle has vertex colours (glTF COLOR_0)
+  bool alphaMask = false;     // some triangle's material cuts out by alpha (glTF alphaMode MASK)
 
   // Shadows: lights that ask for them, and whether anything could block them at all (a single
   // convex object cannot shadow itself: lights behind a surface are skipped before any ray).

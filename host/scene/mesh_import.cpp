@@ -109,6 +109,7 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
   }
   if (!data.faceNormals.empty() && data.faceNormals.size() != faceCount) throw Error(where + ": face normal count");
   if (!data.faceMaterials.empty() && data.faceMaterials.size() != faceCount) throw Error(where + ": material count");
+  if (!data.faceTexcoords.empty() && data.faceTexcoords.size() != faceCount) throw Error(where + ": texcoord count");
 
   // Positions to world space, checked where a face uses them.
   const glm::dmat4& m = request.worldFromMesh;
@@ -148,6 +149,7 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
   // Materials: the override, or the file's own (only those some face uses), or the default.
   std::vector<std::uint32_t> sceneMaterial(data.materials.size(), MeshData::kNone);
   std::uint32_t fallback = MeshData::kNone;
+  std::uint32_t textureBase = MeshData::kNone;
   auto materialOf = [&](std::size_t f) -> std::uint32_t {
     if (request.material) return *request.material;
     std::uint32_t fm = data.faceMaterials.empty() ? MeshData::kNone : data.faceMaterials[f];
@@ -174,6 +176,14 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       }
       sceneMaterial[fm] = static_cast<std::uint32_t>(scene.materials.size());
       scene.materials.push_back(mat);
+      if (mat.baseColorTexture) {
+        // The file's texture list goes to the scene once, when a material first needs it.
+        if (textureBase == MeshData::kNone) {
+          textureBase = static_cast<std::uint32_t>(scene.textures.size());
+          scene.textures.insert(scene.textures.end(), data.textures.begin(), data.textures.end());
+        }
+        scene.materials.back().baseColorTexture->texture += textureBase;
+      }
     }
     return sceneMaterial[fm];
   };
@@ -234,6 +244,20 @@ std::optional<Camera> appendMesh(const MeshData& data, const MeshRequest& reques
       t.normals = ns;
     }
     t.material = materialOf(f);
+    if (scene.materials[t.material].baseColorTexture && !data.faceTexcoords.empty()) {
+      const auto& ft = data.faceTexcoords[f];
+      if (ft[0] < data.texcoords.size() && ft[1] < data.texcoords.size() && ft[2] < data.texcoords.size())
+        t.uvs = std::array<glm::dvec4, 3>{data.texcoords[ft[0]], data.texcoords[ft[1]], data.texcoords[ft[2]]};
+    } else if (scene.materials[t.material].baseColorTexture && data.texcoords.size() == data.positions.size()) {
+      std::array<glm::dvec4, 3> uvs;
+      for (int k = 0; k < 3; ++k) uvs[static_cast<std::size_t>(k)] = data.texcoords[face[static_cast<std::size_t>(k)]];
+      t.uvs = uvs;
+    }
+    if (data.colors.size() == data.positions.size()) {
+      std::array<glm::dvec4, 3> colors;
+      for (int k = 0; k < 3; ++k) colors[static_cast<std::size_t>(k)] = data.colors[face[static_cast<std::size_t>(k)]];
+      t.colors = colors;
+    }
     scene.triangles.push_back(t);
   }
   info.triangleCount = scene.triangles.size() - info.firstTriangle;

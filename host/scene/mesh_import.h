@@ -28,16 +28,21 @@ struct MeshData {
   std::vector<std::array<std::uint32_t, 3>> faceNormals; // into normals (kNone: none); empty or one per face
   std::vector<std::uint32_t> faceMaterials;              // into materials, kNone: the default
   std::vector<Material> materials;                       // named "file: material"
-  std::optional<Camera> camera;                          // the first camera, when asked for
-  std::vector<PointLight> lights;                        // when asked for
-  std::string noTrianglesReason; // the reader's word on why the file has no faces ("points only")
+  // Texture coordinates per position (xy TEXCOORD_0, zw TEXCOORD_1); empty when the file has none.
+  std::vector<glm::dvec4> texcoords;
+  // Per face, the corners' indices into texcoords (kNone: none), for formats that index texture
+  // coordinates apart from positions (OBJ); empty: texcoords run parallel to positions.
+  std::vector<std::array<std::uint32_t, 3>> faceTexcoords;
+  // Vertex colours per position (linear RGBA); empty when the file has none.
+  std::vector<glm::dvec4> colors;
+  // The textures materials' baseColorTexture indices refer to (appendMesh moves them to the scene).
+  std::vector<std::shared_ptr<const Texture>> textures;
+  std::optional<Camera> camera;   // the first camera, when asked for
+  std::vector<PointLight> lights; // when asked for
+  std::string noTrianglesReason;  // the reader's word on why the file has no faces ("points only")
   // What the reader repaired and the user should hear of; printed once the mesh is accepted, so a
   // file that is refused says only why.
   std::vector<std::string> warnings;
-  // Per position, empty when the file has none (PLY only so far); carried for the renderer's
-  // textures and vertex colours to come, unused by appendMesh.
-  std::vector<glm::vec2> texcoords;    // u, v as the file gives them
-  std::vector<glm::vec3> vertexColors; // linear RGB, decoded from the file's sRGB-encoded values
 };
 
 enum class MeshNormals {

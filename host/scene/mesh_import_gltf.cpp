@@ -7,6 +7,7 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
@@ -23,14 +24,23 @@ namespace {
 
 using glm::dvec3;
 
-// Extensions a file may require that vkray honours or that do not change what it renders
-// (textures are not used, so a texture transform changes nothing).
+// Extensions a file may require that vkray honours or that do not change what it renders.
 const char* const kSupportedRequired[] = {"KHR_lights_punctual", "KHR_materials_transmission", "KHR_materials_ior",
                                           "KHR_materials_emissive_strength", "KHR_texture_transform"};
 
-// Images are not decoded: vkray uses the material factors, not textures.
-bool skipImage(tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) {
+// tinygltf hands over each image's encoded bytes (from a file, a data URI or a .glb buffer view);
+// they are kept as they are and decoded by vkray (scene/texture.h), only for images a material uses.
+bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
+                    int size, void*) {
+  image->image.assign(bytes, bytes + size);
+  image->as_is = true;
   return true;
+}
+
+TextureWrap wrapMode(int gl) {
+  if (gl == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return TextureWrap::Clamp;
+  if (gl == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT) return TextureWrap::Mirror;
+  return TextureWrap::Repeat;
 }
 
 std::string firstLine(const std::string& s) {
@@ -68,6 +78,35 @@ struct AccessorView {
   std::size_t stride = 0;
   std::size_t count = 0;
   int componentType = 0;
+  bool normalized = false;
+
+  // Component k of element i: float, or normalized unsigned byte or short (TEXCOORD_n, COLOR_0).
+  double component(std::size_t i, int k) const {
+    const unsigned char* p = data + i * stride;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) return p[k] / 255.0;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+      std::uint16_t v;
+      std::memcpy(&v, p + 2 * k, sizeof v);
+      return v / 65535.0;
+    }
+    float f;
+    std::memcpy(&f, p + 4 * k, sizeof f);
+    return f;
+  }
+
+  // A float, normalized unsigned byte or normalized unsigned short vec2 (TEXCOORD_n).
+  glm::dvec2 vec2(std::size_t i) const {
+    const unsigned char* p = data + i * stride;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE) return glm::dvec2(p[0], p[1]) / 255.0;
+    if (componentType == TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT) {
+      std::uint16_t v[2];
+      std::memcpy(v, p, sizeof v);
+      return glm::dvec2(v[0], v[1]) / 65535.0;
+    }
+    float f[2];
+    std::memcpy(f, p, sizeof f);
+    return glm::dvec2(f[0], f[1]);
+  }
 
   dvec3 vec3(std::size_t i) const {
     float f[3];
@@ -454,6 +493,40 @@ private:
                " positions");
         }
       }
+      std::optional<AccessorView> uvSets[2];
+      for (int set = 0; set < 2; ++set) {
+        const std::string name = "TEXCOORD_" + std::to_string(set);
+        auto uv = prim.attributes.find(name);
+        if (uv == prim.attributes.end()) continue;
+        uvSets[set] = view(uv->second, where + " " + name, TINYGLTF_TYPE_VEC2,
+                           {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                            TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
+        if (uvSets[set]->count != positions.count) {
+          fail(where + " has " + std::to_string(uvSets[set]->count) + " " + name + " for " +
+               std::to_string(positions.count) + " positions");
+        }
+      }
+      // COLOR_0: linear RGB or RGBA (glTF colours are linear), float or normalized integers.
+      std::optional<AccessorView> colors;
+      int colorComponents = 0;
+      if (auto col = prim.attributes.find("COLOR_0"); col != prim.attributes.end()) {
+        const int index = col->second;
+        bool rgba = index >= 0 && static_cast<std::size_t>(index) < model_.accessors.size() &&
+                    model_.accessors[static_cast<std::size_t>(index)].type == TINYGLTF_TYPE_VEC4;
+        colorComponents = rgba ? 4 : 3;
+        colors = view(index, where + " COLOR_0", rgba ? TINYGLTF_TYPE_VEC4 : TINYGLTF_TYPE_VEC3,
+                      {TINYGLTF_COMPONENT_TYPE_FLOAT, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE,
+                       TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT});
+        if (colors->count != positions.count) {
+          fail(where + " has " + std::to_string(colors->count) + " COLOR_0 for " + std::to_string(positions.count) +
+               " positions");
+        }
+      }
+      const bool withColors = colors || !data_.colors.empty();
+      if (withColors) data_.colors.resize(data_.positions.size(), glm::dvec4(1.0));
+      // Texture coordinates run parallel to the positions once some primitive has them.
+      const bool withUvs = uvSets[0] || uvSets[1] || !data_.texcoords.empty();
+      if (withUvs) data_.texcoords.resize(data_.positions.size());
       auto base = static_cast<std::uint32_t>(data_.positions.size());
       if (data_.positions.size() + positions.count > 0xFFFFFFF0u) fail("too many vertices");
       for (std::size_t i = 0; i < positions.count; ++i) {
@@ -464,6 +537,23 @@ private:
         data_.positions.push_back(dvec3(world * glm::dvec4(v, 1.0)));
         // Non-finite normals are kept: the face falls back to flat shading (mesh_import.cpp).
         if (normals) data_.normals.push_back(normalMatrix * normals->vec3(i));
+        if (withUvs) {
+          glm::dvec2 a = uvSets[0] ? uvSets[0]->vec2(i) : glm::dvec2(0.0);
+          glm::dvec2 b = uvSets[1] ? uvSets[1]->vec2(i) : glm::dvec2(0.0);
+          glm::dvec4 uv(a, b);
+          if (!(std::isfinite(uv.x) && std::isfinite(uv.y) && std::isfinite(uv.z) && std::isfinite(uv.w))) {
+            fail(where + " TEXCOORD of vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
+          }
+          data_.texcoords.push_back(uv);
+        }
+        if (withColors) {
+          glm::dvec4 c(1.0);
+          for (int k = 0; k < colorComponents; ++k) c[k] = colors->component(i, k);
+          if (!(std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z) && std::isfinite(c.w))) {
+            fail(where + " COLOR_0 of vertex " + std::to_string(i) + " is not finite (NaN or Inf)");
+          }
+          data_.colors.push_back(glm::clamp(c, 0.0, 1e6));
+        }
       }
 
       std::vector<std::uint32_t> indices;
@@ -589,7 +679,7 @@ private:
   // narrows with smoothness (Phong exponent 2 / alpha^2 - 2 with alpha = r^2, the usual
   // Beckmann-Phong correspondence, Walter et al. 2007). Transmission comes from
   // KHR_materials_transmission, or from 1 - alpha for alphaMode BLEND (then without refraction).
-  Material mapMaterial(std::size_t index) const {
+  Material mapMaterial(std::size_t index) {
     const tinygltf::Material& g = model_.materials[index];
     const auto& pbr = g.pbrMetallicRoughness;
     auto clamp01 = [](double v) { return std::isfinite(v) ? std::clamp(v, 0.0, 1.0) : 1.0; };
@@ -620,12 +710,109 @@ private:
     m.diffuse = 0.8 * (1.0 - m.reflection - m.transmission);
     // Ambient light is reflected as diffuse light is: ambient term = ambient light x diffuse x base.
     m.ambient = m.diffuse;
+    if (g.alphaMode == "MASK") {
+      // A cutoff of 0 cuts nothing (glTF discards alpha < cutoff); a tiny one keeps the mask on.
+      m.alphaCutoff = std::isfinite(g.alphaCutoff) ? std::clamp(g.alphaCutoff, 1e-6, 1.0) : 0.5;
+      m.alpha = alpha;
+    }
+    if (pbr.baseColorTexture.index >= 0) {
+      const std::string where = "materials[" + std::to_string(index) + "].pbrMetallicRoughness.baseColorTexture";
+      m.baseColorTexture = materialTexture(pbr.baseColorTexture, where);
+    }
     return m;
+  }
+
+  // texture -> image (decoded once per image) and sampler; KHR_texture_transform.
+  MaterialTexture materialTexture(const tinygltf::TextureInfo& info, const std::string& where) {
+    if (static_cast<std::size_t>(info.index) >= model_.textures.size()) {
+      fail(where + ".index " + std::to_string(info.index) + " does not exist");
+    }
+    const tinygltf::Texture& tex = model_.textures[static_cast<std::size_t>(info.index)];
+    MaterialTexture mt;
+    mt.texCoord = static_cast<std::uint32_t>(info.texCoord);
+    if (auto it = info.extensions.find("KHR_texture_transform"); it != info.extensions.end() && it->second.IsObject()) {
+      const tinygltf::Value& t = it->second;
+      auto number = [](const tinygltf::Value& v, double fallback) {
+        return v.IsNumber() ? v.GetNumberAsDouble() : fallback;
+      };
+      auto pair = [&](const char* key, glm::dvec2 fallback) {
+        if (!t.Has(key) || !t.Get(key).IsArray() || t.Get(key).ArrayLen() != 2) return fallback;
+        return glm::dvec2(number(t.Get(key).Get(0), fallback.x), number(t.Get(key).Get(1), fallback.y));
+      };
+      mt.transform.offset = pair("offset", glm::dvec2(0.0));
+      mt.transform.scale = pair("scale", glm::dvec2(1.0));
+      if (t.Has("rotation")) mt.transform.rotation = number(t.Get("rotation"), 0.0);
+      if (t.Has("texCoord") && t.Get("texCoord").IsInt())
+        mt.texCoord = static_cast<std::uint32_t>(t.Get("texCoord").GetNumberAsInt());
+      for (double v : {mt.transform.offset.x, mt.transform.offset.y, mt.transform.scale.x, mt.transform.scale.y,
+                       mt.transform.rotation}) {
+        if (!std::isfinite(v)) fail(where + " KHR_texture_transform has a non-finite number");
+      }
+    }
+    if (mt.texCoord > 1)
+      fail(where + ".texCoord " + std::to_string(mt.texCoord) + ": vkray reads TEXCOORD_0 and TEXCOORD_1 only");
+    if (tex.source < 0 || static_cast<std::size_t>(tex.source) >= model_.images.size()) {
+      fail("textures[" + std::to_string(info.index) + "].source " + std::to_string(tex.source) + " does not exist");
+    }
+    const int sampler = tex.sampler;
+    if (sampler >= 0 && static_cast<std::size_t>(sampler) >= model_.samplers.size()) {
+      fail("textures[" + std::to_string(info.index) + "].sampler " + std::to_string(sampler) + " does not exist");
+    }
+    auto key = std::make_pair(tex.source, sampler);
+    if (auto it = textureIndex_.find(key); it != textureIndex_.end()) {
+      mt.texture = it->second;
+      return mt;
+    }
+    auto texture = std::make_shared<Texture>();
+    texture->levels = buildMipChain(decodeGltfImage(static_cast<std::size_t>(tex.source), texture->name));
+    if (sampler >= 0) {
+      const tinygltf::Sampler& smp = model_.samplers[static_cast<std::size_t>(sampler)];
+      texture->wrapS = wrapMode(smp.wrapS);
+      texture->wrapT = wrapMode(smp.wrapT);
+      texture->nearest = smp.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
+    }
+    mt.texture = static_cast<std::uint32_t>(data_.textures.size());
+    textureIndex_[key] = mt.texture;
+    data_.textures.push_back(std::move(texture));
+    return mt;
+  }
+
+  TextureLevel decodeGltfImage(std::size_t index, std::string& name) const {
+    const tinygltf::Image& img = model_.images[index];
+    const std::string what = "images[" + std::to_string(index) + "]";
+    if (img.bufferView >= 0) {
+      name = request_.shownAs + ": " + what;
+      if (static_cast<std::size_t>(img.bufferView) >= model_.bufferViews.size())
+        fail(what + ".bufferView does not exist");
+      const tinygltf::BufferView& bv = model_.bufferViews[static_cast<std::size_t>(img.bufferView)];
+      if (bv.buffer < 0 || static_cast<std::size_t>(bv.buffer) >= model_.buffers.size()) fail(what + ": no buffer");
+      const auto& data = model_.buffers[static_cast<std::size_t>(bv.buffer)].data;
+      if (bv.byteOffset > data.size() || bv.byteLength > data.size() - bv.byteOffset) {
+        fail(what + ": its bufferView reaches past the end of its buffer");
+      }
+      return decodeImage(data.data() + bv.byteOffset, bv.byteLength, name);
+    }
+    if (img.uri.empty() || img.uri.rfind("data:", 0) == 0) {
+      // A data URI (tinygltf decoded the base64 and handed the bytes to keepImageBytes).
+      name = request_.shownAs + ": " + what;
+      if (img.image.empty()) fail(what + ": the image has no data");
+      return decodeImage(img.image.data(), img.image.size(), name);
+    }
+    std::filesystem::path file = request_.file.parent_path() / img.uri;
+    name = file.string();
+    // tinygltf read it when it could; a file it could not read leaves the bytes empty.
+    if (img.image.empty()) {
+      if (!std::filesystem::exists(file))
+        throw InputError(file.string(), "texture file not found (" + request_.shownAs + " " + what + ")");
+      return readImageFile(file, file.string());
+    }
+    return decodeImage(img.image.data(), img.image.size(), file.string());
   }
 
   const MeshRequest& request_;
   const tinygltf::Model& model_;
   MeshData data_;
+  std::map<std::pair<int, int>, std::uint32_t> textureIndex_; // (image, sampler) -> data_.textures
   std::vector<bool> visited_;
 };
 
@@ -633,7 +820,7 @@ private:
 
 MeshData readGltf(const MeshRequest& request) {
   tinygltf::TinyGLTF loader;
-  loader.SetImageLoader(skipImage, nullptr);
+  loader.SetImageLoader(keepImageBytes, nullptr);
   tinygltf::Model model;
   std::string err;
   std::string warn;

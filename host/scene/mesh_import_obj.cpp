@@ -160,6 +160,25 @@ MeshData readObj(const MeshRequest& request) {
     for (const auto& idx : shape.mesh.indices) anyNormals = anyNormals || idx.normal_index >= 0;
   }
   for (const auto& mtl : materials) data.materials.push_back(mapMtl(mtl, where));
+  // map_Kd: the diffuse colour times the image (relative to the OBJ's directory; OBJ's v runs up).
+  for (std::size_t i = 0; i < materials.size(); ++i) {
+    if (materials[i].diffuse_texname.empty()) continue;
+    std::filesystem::path image = request.file.parent_path() / materials[i].diffuse_texname;
+    if (!std::filesystem::exists(image))
+      throw InputError(image.string(), "texture file not found (map_Kd of " + where + ")");
+    auto texture = std::make_shared<Texture>();
+    texture->name = image.string();
+    texture->levels = buildMipChain(readImageFile(image, image.string()));
+    data.materials[i].baseColorTexture = MaterialTexture{static_cast<std::uint32_t>(data.textures.size())};
+    data.textures.push_back(std::move(texture));
+  }
+  for (std::size_t i = 0; i + 1 < attrib.texcoords.size(); i += 2)
+    data.texcoords.emplace_back(attrib.texcoords[i], 1.0 - attrib.texcoords[i + 1], 0.0, 0.0);
+  auto texcoordOf = [&](const tinyobj::index_t& idx) {
+    return idx.texcoord_index >= 0 && static_cast<std::size_t>(idx.texcoord_index) < data.texcoords.size()
+               ? static_cast<std::uint32_t>(idx.texcoord_index)
+               : MeshData::kNone;
+  };
 
   std::vector<bool> checkedVertex(vertexCount, false);
   std::vector<dvec3> corners;
@@ -228,6 +247,11 @@ MeshData readObj(const MeshRequest& request) {
           }
           data.faces.push_back(fv);
           if (anyNormals) data.faceNormals.push_back(fn);
+          if (!data.texcoords.empty()) {
+            data.faceTexcoords.push_back({texcoordOf(mesh.indices[offset + t[0]]),
+                                          texcoordOf(mesh.indices[offset + t[1]]),
+                                          texcoordOf(mesh.indices[offset + t[2]])});
+          }
           data.faceMaterials.push_back(material);
         }
       }

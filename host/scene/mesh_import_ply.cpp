@@ -612,7 +612,7 @@ private:
     data_.positions.resize(vertexCount);
     if (hasNormals_) data_.normals.resize(vertexCount);
     if (hasUvs_) data_.texcoords.resize(vertexCount);
-    if (hasColors_) data_.vertexColors.resize(vertexCount);
+    if (hasColors_) data_.colors.resize(vertexCount);
     // Most meshes are triangles or quads: one triangle or two per face.
     data_.faces.reserve(static_cast<std::size_t>(face_->count));
     for (const Element& e : header_.elements) {
@@ -669,7 +669,11 @@ private:
       if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z))) in.fail("not finite (NaN or Inf)");
       data_.positions[i] = p;
       if (hasNormals_) data_.normals[i] = dvec3(v[kNx], v[kNy], v[kNz]);
-      if (hasUvs_) data_.texcoords[i] = glm::vec2(static_cast<float>(v[kU]), static_cast<float>(v[kV]));
+      // Stored as the file's floats would round; v runs up in PLY (as in OBJ), down in glTF's texture
+      // space, which the kernel samples in.
+      if (hasUvs_) {
+        data_.texcoords[i] = glm::dvec4(static_cast<float>(v[kU]), 1.0 - static_cast<float>(v[kV]), 0.0, 0.0);
+      }
       if (hasColors_) {
         glm::vec3 c;
         for (int k = 0; k < 3; ++k) {
@@ -684,7 +688,7 @@ private:
             c[k] = srgbToLinear(static_cast<float>(std::clamp(x, 0.0, 1.0)));
           }
         }
-        data_.vertexColors[i] = c;
+        data_.colors[i] = glm::dvec4(glm::dvec3(c), 1.0);
       }
     }
   }

@@ -12,6 +12,7 @@
 
 #include <glm/glm.hpp>
 
+#include "scene/texture.h"
 #include "util/enum_names.h"
 
 namespace vkray {
@@ -32,6 +33,9 @@ enum class TransmissiveShadows { Attenuated, Opaque };
 enum class Antialiasing { Stratified, Adaptive };
 enum class BvhMode { Auto, On, Off };
 enum class Precision { Float32, Float64 }; // arithmetic of ray/surface intersection
+// Texture sampling: the nearest texel or bilinear on the full-size image, or trilinear between the
+// mip levels a ray cone's footprint picks (Akenine-Moller et al., Ray Tracing Gems ch. 20).
+enum class TextureFilter { Nearest, Bilinear, Cone };
 
 // The names of the knobs' values in scene files, on the command line, in the overlay and the benches.
 template <> struct EnumNames<Numerics> {
@@ -57,6 +61,10 @@ template <> struct EnumNames<Precision> {
   static constexpr std::array<EnumName<Precision>, 2> values{
       {{Precision::Float32, "float32"}, {Precision::Float64, "float64"}}};
 };
+template <> struct EnumNames<TextureFilter> {
+  static constexpr std::array<EnumName<TextureFilter>, 3> values{
+      {{TextureFilter::Nearest, "nearest"}, {TextureFilter::Bilinear, "bilinear"}, {TextureFilter::Cone, "cone"}}};
+};
 
 // Accuracy knobs; every one can also be set on the command line.
 struct RenderSettings {
@@ -72,11 +80,19 @@ struct RenderSettings {
   TransmissiveShadows transmissiveShadows = TransmissiveShadows::Attenuated;
   BvhMode bvh = BvhMode::Auto;
   Precision precision = Precision::Float32; // float64: the accuracy reference (needs shaderFloat64)
+  TextureFilter textureFilter = TextureFilter::Cone;
 };
 
 struct Checker {
   glm::dvec3 color2{0.0};
   double scale = 1.0; // side of a square, world units
+};
+
+// A material's use of a texture: which (Scene::textures), through which uv set and transform.
+struct MaterialTexture {
+  std::uint32_t texture = 0;  // index into Scene::textures
+  std::uint32_t texCoord = 0; // uv set 0 or 1 (glTF TEXCOORD_n)
+  TextureTransform transform; // KHR_texture_transform
 };
 
 struct Material {
@@ -91,6 +107,12 @@ struct Material {
   double ior = 1.5;
   glm::dvec3 absorption{0.0}; // Beer-Lambert coefficient per unit length
   std::optional<Checker> checker;
+  // The base colour is color x this texture's texel (glTF baseColorTexture x baseColorFactor).
+  std::optional<MaterialTexture> baseColorTexture;
+  // glTF alphaMode MASK: triangles are cut out where alpha x the texture's alpha < alphaCutoff
+  // (0: not masked). Triangles only.
+  double alphaCutoff = 0.0;
+  double alpha = 1.0; // baseColorFactor's alpha
 };
 
 struct PointLight {
@@ -122,6 +144,10 @@ struct Polygon {
 struct Triangle {
   glm::dvec3 v[3];
   std::optional<std::array<glm::dvec3, 3>> normals; // per-vertex shading normals, unit
+  // Per-corner texture coordinates: xy set 0, zw set 1 (only for triangles of textured materials).
+  std::optional<std::array<glm::dvec4, 3>> uvs;
+  // Per-corner vertex colours, linear RGBA (glTF COLOR_0), multiplying the base colour.
+  std::optional<std::array<glm::dvec4, 3>> colors;
   std::uint32_t material = 0;
 };
 
@@ -159,6 +185,7 @@ struct Scene {
   std::vector<Plane> planes;
   std::vector<Polygon> polygons;
   std::vector<Triangle> triangles;
+  std::vector<std::shared_ptr<const Texture>> textures; // decoded once, shared by animation frames
   std::vector<MeshInfo> meshes;
   std::vector<NamedObject> namedObjects; // in file order
   std::vector<NamedLight> namedLights;

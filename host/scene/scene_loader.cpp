@@ -97,7 +97,7 @@ void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sa
 
 void readRender(const JsonNode& node, RenderSettings& r) {
   node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics", "fresnel",
-                  "transmissive_shadows", "precision", "bvh"});
+                  "transmissive_shadows", "precision", "bvh", "texture_filter"});
   if (auto v = node.find("max_depth")) r.maxDepth = static_cast<int>(v->integer(0, kMaxDepthLimit));
   if (auto v = node.find("spp")) r.spp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("bailout")) r.bailout = v->number(0.0, 1.0);
@@ -107,6 +107,7 @@ void readRender(const JsonNode& node, RenderSettings& r) {
   if (auto v = node.find("fresnel")) r.fresnel = v->enumValue<FresnelMode>();
   if (auto v = node.find("transmissive_shadows")) r.transmissiveShadows = v->enumValue<TransmissiveShadows>();
   if (auto v = node.find("precision")) r.precision = v->enumValue<Precision>();
+  if (auto v = node.find("texture_filter")) r.textureFilter = v->enumValue<TextureFilter>();
   if (auto v = node.find("bvh")) r.bvh = v->enumValue<BvhMode>();
 }
 

@@ -271,6 +271,7 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
     comboEnum("numerics", r.numerics);
     comboEnum("fresnel", r.fresnel);
     comboEnum("glass shadows", r.transmissiveShadows);
+    comboEnum("texture filter", r.textureFilter);
     comboEnum("resolution", settings.renderScale, {{1.0, "100 %"}, {0.5, "50 %"}, {0.25, "25 %"}});
     comboEnum("while moving", settings.motionScale, {{1.0, "100 %"}, {0.5, "50 %"}, {0.25, "25 %"}});
     ImGui::Checkbox("shadows", &settings.effects.shadows);

@@ -33,6 +33,10 @@ layout(binding = kBindingPrimRefs) uniform usamplerBuffer primRefTexels; // 1 pe
 layout(std140, binding = kBindingSceneUbo) uniform SceneBlock { SceneUbo small; };
 // Written by shaders/entry.comp as a storage buffer, read here as texels once per invocation.
 layout(binding = kBindingEntryTexels) uniform usamplerBuffer entryTexels;
+// Textures (TEXTURES only; layout in shared/gpu_types.h).
+layout(binding = kBindingTexCoords) uniform samplerBuffer texCoordTexels;
+layout(binding = kBindingTextureInfo) uniform usamplerBuffer textureInfoTexels;
+layout(binding = kBindingTexels) uniform samplerBuffer textureTexels;
 
 // Loop bounds: a specialization constant where the host baked the count in (the loop unrolls).
 uint sphereCount() { return SPHERE_COUNT != kRuntimeCount ? SPHERE_COUNT : opaqueUniform(frame.sphereCount); }

@@ -5,6 +5,7 @@
 #define VKRAY_PRIMITIVES_GLSL
 
 #include "precision.glsl"
+#include "texture.glsl"
 
 float sphereT(TraceRay r, uint i, float tMax) {
   Sphere s = loadSphere(i);
@@ -34,7 +35,7 @@ void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
   } else if (HAS_TRIANGLES && kind == kPrimTriangle) {
     vec3 bary;
     float t = triangleT(r, index, hit.t, bary);
-    if (t > 0.0) hit = Hit(t, kPrimTriangle, index, bary);
+    if (t > 0.0 && !(ALPHA_MASK && alphaCutOut(index, bary))) hit = Hit(t, kPrimTriangle, index, bary);
   } else if (HAS_POLYGONS && kind == kPrimPolygon) {
     float t = polygonT(r, index, hit.t);
     if (t > 0.0) hit = Hit(t, kPrimPolygon, index, vec3(0.0));
@@ -45,6 +46,8 @@ void testPrimitive(TraceRay r, uint kind, uint index, inout Hit hit) {
 Surface surfaceAt(TraceRay r, Hit hit) {
   Surface s;
   s.kind = hit.kind;
+  if (TEXTURES) s.hasUv = false;
+  if (VERTEX_COLORS) s.vertexColor = vec3(1.0);
   if (hit.kind == kPrimSphere) {
     Sphere sph = loadSphere(hit.index);
     sphereHitPoint(r.ray, hit.t, sphereCenter(sph), sphereRadius(sph), s.p, s.ng, s.errorBound);
@@ -62,6 +65,22 @@ Surface surfaceAt(TraceRay r, Hit hit) {
       if (len > 0.0) s.ns = n / len; // zero-length interpolated normal: keep the geometric one
     }
     s.material = triangleMaterial(tri);
+    uint uvBase = triangleUvBasePlusOne(tri);
+    if ((TEXTURES || VERTEX_COLORS) && uvBase != 0u) {
+      int b = int(uvBase - 1u);
+      vec4 flags = texelFetch(texCoordTexels, b + 3);
+      if (TEXTURES) {
+        s.uv = hit.bary.x * texelFetch(texCoordTexels, b) + hit.bary.y * texelFetch(texCoordTexels, b + 1) +
+               hit.bary.z * texelFetch(texCoordTexels, b + 2);
+        s.uvLodBias = flags.xy;
+        s.hasUv = flags.w != 0.0;
+      }
+      if (VERTEX_COLORS && flags.z != 0.0) {
+        s.vertexColor = hit.bary.x * texelFetch(texCoordTexels, b + 4).rgb +
+                        hit.bary.y * texelFetch(texCoordTexels, b + 5).rgb +
+                        hit.bary.z * texelFetch(texCoordTexels, b + 6).rgb;
+      }
+    }
   } else if (hit.kind == kPrimPolygon) {
     Polygon poly = loadPolygon(hit.index);
     polygonSurface(r.ray, hit.t, loadPolyVertex(polygonFirstVertex(poly)), s.p, s.errorBound);

@@ -27,6 +27,11 @@ struct Surface {
   float errorBound; // distance of p from the true surface along ng, at most
   uint material;
   uint kind;        // kPrim* of the primitive hit
+  // TEXTURES only (left unset otherwise, so the compiler drops them):
+  bool hasUv;       // a triangle with texture coordinates
+  vec4 uv;          // xy: set 0, zw: set 1
+  vec2 uvLodBias;   // 0.5 log2(uv area / world area) of the triangle, sets 0 and 1
+  vec3 vertexColor; // VERTEX_COLORS only: interpolated COLOR_0 (1 elsewhere)
 };
 
 // A ray with its per-ray precomputation for the watertight triangle test and the BVH slabs.

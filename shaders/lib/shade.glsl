@@ -5,6 +5,7 @@
 
 #include "optics.glsl"
 #include "scene.glsl"
+#include "texture.glsl"
 
 // This invocation's ray counters (the list in shared/gpu_types.h), summed per subgroup and added to
 // the statistics buffer at the end of the kernel (trace.comp, flushStats). `truncated` is counted
@@ -81,7 +82,7 @@ vec3 beerLambert(vec3 sigma, float dist) {
 // 3-D checker (cubes of side `scale` in world space), evaluated at a point pushed just behind the
 // surface by more than the hit point's error: a floor at y = 0 would otherwise flicker between two
 // cells as rounding puts its hit points on either side of the cell boundary.
-vec3 baseColor(Material mat, Surface s) {
+vec3 untexturedBaseColor(Material mat, Surface s) {
   if (!CHECKER) return baseColor(mat);
   float scale = checkerSize(mat);
   vec3 offset = frame.worldOffset.xyz;
@@ -90,6 +91,14 @@ vec3 baseColor(Material mat, Surface s) {
   float cells = floor(q.x) + floor(q.y) + floor(q.z);
   bool odd = cells - 2.0 * floor(0.5 * cells) != 0.0;
   return (scale > 0.0 && odd) ? checkerColor(mat) : baseColor(mat);
+}
+
+// The material's colour times its base-colour texture's texel (glTF baseColorFactor x texture).
+vec3 baseColor(Material mat, Surface s) {
+  vec3 c = untexturedBaseColor(mat, s);
+  if (TEXTURES) c *= baseColorTexel(mat, s).rgb;
+  if (VERTEX_COLORS) c *= s.vertexColor;
+  return c;
 }
 
 // Fraction of a light's colour that reaches `origin` (already offset off the surface): 0 or 1 for

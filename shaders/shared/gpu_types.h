@@ -46,7 +46,12 @@ VKRAY_CONST(uint, kBindingEntryPoints, 15u); // uvec4[]: each 8 x 8 tile's BVH e
 // The same buffer as texels (RGBA32UI), as the trace kernels read it: on lavapipe an SSBO read
 // assembles each lane's value through memory, a texel read is one gather.
 VKRAY_CONST(uint, kBindingEntryTexels, 16u);
-VKRAY_CONST(uint, kBindingCount, 17u);
+// Textures (kSpecTextures), all texel buffers: a scene's images in one buffer, sampled by hand
+// (shaders/lib/texture.glsl), so no image descriptors and one layout for every pipeline.
+VKRAY_CONST(uint, kBindingTexCoords, 17u);   // texels (RGBA32F): 4 per textured triangle (below)
+VKRAY_CONST(uint, kBindingTextureInfo, 18u); // texels (RGBA32UI): texture references, then levels
+VKRAY_CONST(uint, kBindingTexels, 19u);      // texels (RGBA32F): every level of every texture, linear RGBA
+VKRAY_CONST(uint, kBindingCount, 20u);
 
 // Capacities of the uniform copy, 64 KiB in all (the smallest maxUniformBufferRange of the devices
 // vkray targets). On CPU drivers a UBO read is one vector gather, an SSBO read a per-lane scalar
@@ -97,7 +102,14 @@ VKRAY_CONST(uint, kSpecShadingInUbo, 24u);
 VKRAY_CONST(uint, kSpecMaterialCount, 25u);
 // Eye rays start their BVH walk at their tile's entry points (shaders/entry.comp) instead of the root.
 VKRAY_CONST(uint, kSpecEntryPoints, 26u);
-VKRAY_CONST(uint, kSpecCount, 27u);
+// Some material has a base-colour texture (and some triangle texture coordinates).
+VKRAY_CONST(uint, kSpecTextures, 27u);
+VKRAY_CONST(uint, kSpecTextureFilter, 28u); // kTextureNearest / kTextureBilinear / kTextureCone
+// Some triangle's material is glTF alphaMode MASK: the triangle test skips cut-out hits.
+VKRAY_CONST(uint, kSpecAlphaMask, 29u);
+// Some triangle has vertex colours (glTF COLOR_0).
+VKRAY_CONST(uint, kSpecVertexColors, 30u);
+VKRAY_CONST(uint, kSpecCount, 31u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -107,6 +119,24 @@ VKRAY_CONST(uint, kFresnelExact, 0u);
 VKRAY_CONST(uint, kFresnelSchlick, 1u);
 VKRAY_CONST(uint, kShadowsOpaque, 0u);
 VKRAY_CONST(uint, kShadowsAttenuated, 1u);
+VKRAY_CONST(uint, kTextureNearest, 0u);  // level 0, nearest texel
+VKRAY_CONST(uint, kTextureBilinear, 1u); // level 0, bilinear
+VKRAY_CONST(uint, kTextureCone, 2u);     // trilinear between the levels a ray cone picks
+
+// Textures. A texture reference (one per textured material) is kTextureRefTexels RGBA32UI texels
+// of TextureInfo: (first level record, level count, wrapS | wrapT << 2 | nearest << 4, uv set),
+// then floatBits(uv transform row 0, lod offset) and floatBits(row 1, 0); the lod offset is
+// 0.5 log2(width * height * |det(transform)|) of level 0. A level record is (first texel in
+// Texels, width, height, 0). A textured triangle's uv record is 4 RGBA32F texels of TexCoords: its
+// corners (xy set 0, zw set 1), then (0.5 log2(uv area / world area) for set 0 and set 1, colours,
+// uvs): `uvs` 1 when the corners hold texture coordinates, `colours` 1 when 3 more texels follow
+// with the corners' vertex colours (linear RGBA; glTF COLOR_0), which multiply the base colour.
+VKRAY_CONST(uint, kTextureRefTexels, 3u);
+VKRAY_CONST(uint, kUvRecordTexels, 4u);      // without vertex colours
+VKRAY_CONST(uint, kUvRecordColorTexels, 3u); // the vertex colours after them
+VKRAY_CONST(uint, kWrapRepeat, 0u);
+VKRAY_CONST(uint, kWrapClamp, 1u);
+VKRAY_CONST(uint, kWrapMirror, 2u);
 
 // ---- Limits shared by host validation and shader arrays ------------------------------------------
 VKRAY_CONST(uint, kMaxStackSize, 16u);      // deepest explicit stack compiled into a pipeline
@@ -152,8 +182,9 @@ struct Material {
   vec4 color;        // rgb: base colour (linear); a: ambient coefficient
   vec4 color2;       // rgb: checker's second colour; a: checker square size (0: no checker)
   vec4 phong;        // x: diffuse, y: specular, z: shininess (Phong exponent), w: reflection 0..1
-  vec4 transmission; // x: transmission 0..1, y: index of refraction, zw: unused
-  vec4 absorption;   // rgb: Beer-Lambert absorption per unit length; a: unused
+  vec4 transmission; // x: transmission 0..1, y: index of refraction, z: texture reference + 1 (bits;
+                     // 0: none), w: alpha cutoff (alphaMode MASK; 0: not masked)
+  vec4 absorption;   // rgb: Beer-Lambert absorption per unit length; a: base colour alpha (MASK)
 };
 
 struct Light {
@@ -174,7 +205,7 @@ struct Plane {
 struct Triangle {
   vec4 v0; // xyz: vertex 0; w: material id (uintBitsToFloat)
   vec4 v1; // xyz: vertex 1; w: first of 3 shading normals in Normals[] or kNoNormals (bits)
-  vec4 v2; // xyz: vertex 2; w: unused
+  vec4 v2; // xyz: vertex 2; w: first uv record texel in TexCoords[] + 1 (bits; 0: none)
 };
 
 struct Polygon {
@@ -240,6 +271,15 @@ float transmittance(Material m) {
 float refractiveIndex(Material m) {
   return m.transmission.y;
 }
+uint textureRefPlusOne(Material m) {
+  return floatBitsToUint(m.transmission.z);
+} // 0: untextured
+float alphaCutoff(Material m) {
+  return m.transmission.w;
+} // 0: not masked
+float baseAlpha(Material m) {
+  return m.absorption.a;
+}
 vec3 absorptionPerUnit(Material m) {
   return m.absorption.rgb;
 }
@@ -280,6 +320,9 @@ uint triangleMaterial(Triangle t) {
 uint triangleNormalBase(Triangle t) {
   return floatBitsToUint(t.v1.w);
 } // kNoNormals: flat
+uint triangleUvBasePlusOne(Triangle t) {
+  return floatBitsToUint(t.v2.w);
+} // 0: no texture coordinates
 
 vec3 polygonNormal(Polygon q) {
   return q.plane.xyz;
@@ -315,7 +358,7 @@ struct FrameParams {
   vec4 ambientLight;       // rgb: global ambient light
   float bailout;           // branches with a smaller weight are not traced
   float adaptiveThreshold; // adaptive AA: neighbour difference that triggers refinement
-  float unusedKnob0;
+  float coneSpread;        // textures: the eye rays' cone spread angle, radians per unit distance
   float unusedKnob1;
   uvec2 imageSize; // width, height in pixels
   uint unused0;

@@ -1,0 +1,109 @@
+// Base-colour textures, sampled by hand from one texel buffer (layout in shared/gpu_types.h):
+// nearest, bilinear, or trilinear between the two mip levels a ray cone's footprint falls between
+// (Akenine-Moller et al., "Texture Level of Detail Strategies for Real-Time Ray Tracing", Ray
+// Tracing Gems ch. 20, sec. 20.3.4). Compiled in only when TEXTURES; host/scene/texture.cpp has the
+// same samplers for the tests.
+#ifndef VKRAY_TEXTURE_GLSL
+#define VKRAY_TEXTURE_GLSL
+
+#include "bindings.glsl"
+#include "ray_records.glsl"
+
+// The ray cone's footprint at the hit being shaded: width / |n.d| (trace.comp sets it).
+float gConeFootprint = 0.0;
+
+// uv into [0, 1] by the wrap mode (the repeat and mirror periods taken in float, before any integer
+// conversion, so huge uv cannot overflow).
+float wrapAxis(float u, uint mode) {
+  if (mode == kWrapRepeat) return u - floor(u);
+  if (mode == kWrapMirror) {
+    float m = u - 2.0 * floor(0.5 * u);
+    return m <= 1.0 ? m : 2.0 - m;
+  }
+  return clamp(u, 0.0, 1.0);
+}
+
+// A bilinear neighbour's index, i in [-1, n]: repeat wraps round, clamp and mirror stay at the edge.
+uint edgeTexel(int i, uint n, uint mode) {
+  if (mode == kWrapRepeat) return i < 0 ? n - 1u : (uint(i) >= n ? 0u : uint(i));
+  return uint(clamp(i, 0, int(n) - 1));
+}
+
+vec4 levelTexel(uvec4 level, uint x, uint y) { return texelFetch(textureTexels, int(level.x + y * level.y + x)); }
+
+vec4 sampleLevelNearest(uvec4 level, vec2 uv) {
+  uint x = min(uint(uv.x * float(level.y)), level.y - 1u);
+  uint y = min(uint(uv.y * float(level.z)), level.z - 1u);
+  return levelTexel(level, x, y);
+}
+
+vec4 sampleLevelBilinear(uvec4 level, vec2 uv, uint wrapS, uint wrapT) {
+  vec2 p = uv * vec2(level.yz) - 0.5;
+  vec2 p0 = floor(p);
+  vec2 f = p - p0;
+  ivec2 i = ivec2(p0);
+  uint x0 = edgeTexel(i.x, level.y, wrapS), x1 = edgeTexel(i.x + 1, level.y, wrapS);
+  uint y0 = edgeTexel(i.y, level.z, wrapT), y1 = edgeTexel(i.y + 1, level.z, wrapT);
+  vec4 top = mix(levelTexel(level, x0, y0), levelTexel(level, x1, y0), f.x);
+  vec4 bottom = mix(levelTexel(level, x0, y1), levelTexel(level, x1, y1), f.x);
+  return mix(top, bottom, f.y);
+}
+
+// Texture reference `ref` (+ 1) at texture coordinates `uvs` (both sets), with the triangle's lod
+// biases and the ray cone's footprint (0: the full-size image).
+vec4 baseColorTexelAt(uint ref, vec4 uvs, vec2 uvLodBias, float footprint) {
+  int r = int((ref - 1u) * kTextureRefTexels);
+  uvec4 head = texelFetch(textureInfoTexels, r);
+  uvec4 row0 = texelFetch(textureInfoTexels, r + 1);
+  uvec4 row1 = texelFetch(textureInfoTexels, r + 2);
+  bool set1 = head.w != 0u;
+  vec3 uv1 = vec3(set1 ? uvs.zw : uvs.xy, 1.0);
+  vec2 uv = vec2(dot(uintBitsToFloat(row0.xyz), uv1), dot(uintBitsToFloat(row1.xyz), uv1));
+  uint wrapS = head.z & 3u;
+  uint wrapT = (head.z >> 2u) & 3u;
+  bool nearest = (head.z & 16u) != 0u;
+  vec2 w = vec2(wrapAxis(uv.x, wrapS), wrapAxis(uv.y, wrapT));
+  uvec4 base = texelFetch(textureInfoTexels, int(head.x));
+  if (TEXTURE_FILTER == kTextureNearest) return sampleLevelNearest(base, w);
+  if (TEXTURE_FILTER == kTextureBilinear) return nearest ? sampleLevelNearest(base, w) : sampleLevelBilinear(base, w, wrapS, wrapT);
+  // Ray cones: lambda = 0.5 log2(texel area / world area) + log2(width / |n.d|) (RTG eq. 20.7).
+  float lod = (set1 ? uvLodBias.y : uvLodBias.x) + uintBitsToFloat(row0.w) + log2(max(footprint, 1e-30));
+  if (nearest && lod <= 0.0) return sampleLevelNearest(base, w); // magnified: the sampler's filter
+  lod = clamp(lod, 0.0, float(head.y - 1u));
+  uint l0 = uint(lod);
+  uint l1 = min(l0 + 1u, head.y - 1u);
+  vec4 a = sampleLevelBilinear(texelFetch(textureInfoTexels, int(head.x + l0)), w, wrapS, wrapT);
+  vec4 b = sampleLevelBilinear(texelFetch(textureInfoTexels, int(head.x + l1)), w, wrapS, wrapT);
+  return mix(a, b, lod - float(l0));
+}
+
+// The material's base-colour texel at the surface; 1 for untextured materials and surfaces
+// without texture coordinates.
+vec4 baseColorTexel(Material mat, Surface s) {
+  uint ref = textureRefPlusOne(mat);
+  if (ref == 0u || !s.hasUv) return vec4(1.0);
+  return baseColorTexelAt(ref, s.uv, s.uvLodBias, gConeFootprint);
+}
+
+// glTF alphaMode MASK (ALPHA_MASK only): a candidate hit on triangle `index` at `bary` does not
+// count where the base colour's alpha (factor x texel, the full-size image: the intersection test
+// has no ray cone) is below the material's cutoff. Used by every query, so shadow rays pass
+// through the cut-out parts too.
+bool alphaCutOut(uint index, vec3 bary) {
+  Triangle tri = loadTriangle(index);
+  Material m = loadMaterial(triangleMaterial(tri));
+  float cutoff = alphaCutoff(m);
+  float alpha = baseAlpha(m);
+  uint ref = textureRefPlusOne(m);
+  uint uvBase = triangleUvBasePlusOne(tri);
+  if (TEXTURES && cutoff > 0.0 && ref != 0u && uvBase != 0u &&
+      texelFetch(texCoordTexels, int(uvBase - 1u) + 3).w != 0.0) {
+    int b = int(uvBase - 1u);
+    vec4 uvs = bary.x * texelFetch(texCoordTexels, b) + bary.y * texelFetch(texCoordTexels, b + 1) +
+               bary.z * texelFetch(texCoordTexels, b + 2);
+    alpha *= baseColorTexelAt(ref, uvs, vec2(0.0), 0.0).a;
+  }
+  return alpha < cutoff;
+}
+
+#endif

@@ -1,0 +1,542 @@
+// Textures (host/scene/texture.*, the glTF importer's baseColorTexture, shaders/lib/texture.glsl).
+// Host (Texture*): the mip chain keeps every level's mean and handles odd sides, sRGB decoding is
+// exact, wrap modes and KHR_texture_transform, data URIs, the three forms of BoxTextured (external
+// file, data URI, .glb buffer view), and bad input named in one line. GPU (RenderTexture*): sampled
+// colours on BoxTextured match the PNG decoded by image_io's independent reader at texels found by
+// a double-precision ray cast on the host; a textured scene renders the same with and without
+// specialization; ray cones at 1 spp are closer to a 256-spp reference than bilinear at 1 spp.
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <random>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "image/image_io.h"
+#include "image/metrics.h"
+#include "render/gpu_scene.h"
+#include "render/kernel_variants.h"
+#include "scene/features.h"
+#include "scene/mesh_import.h"
+#include "scene/scene_loader.h"
+#include "scene/texture.h"
+#include "test_support.h"
+#include "util/error.h"
+
+namespace vkray {
+namespace {
+
+namespace fs = std::filesystem;
+using test::render;
+using test::sceneFromJson;
+const fs::path kAssimp = "/usr/share/assimp/models/glTF2";
+const char* const kBoxForms[] = {"BoxTextured-glTF/BoxTextured.gltf", "BoxTextured-glTF-Binary/BoxTextured.glb",
+                                 "BoxTextured-glTF-Embedded/BoxTextured.gltf"};
+
+bool haveBoxTextured() {
+  return fs::exists(kAssimp / kBoxForms[0]);
+}
+
+glm::dvec4 mean(const TextureLevel& l) {
+  glm::dvec4 sum(0.0);
+  for (const auto& t : l.texels) sum += glm::dvec4(t);
+  return sum / double(l.texels.size());
+}
+
+TEST(TextureMip, LevelsHalveDownToOneAndKeepTheMeanForOddSides) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  TextureLevel base;
+  base.width = 7;
+  base.height = 3;
+  for (int i = 0; i < 21; ++i) base.texels.emplace_back(u(rng), u(rng), u(rng), u(rng));
+  glm::dvec4 m0 = mean(base);
+  std::vector<TextureLevel> levels = buildMipChain(base);
+  ASSERT_EQ(levels.size(), 3u); // 7x3, 3x1, 1x1
+  EXPECT_EQ(levels[1].width, 3u);
+  EXPECT_EQ(levels[1].height, 1u);
+  EXPECT_EQ(levels[2].width, 1u);
+  EXPECT_EQ(levels[2].height, 1u);
+  for (const auto& l : levels) {
+    glm::dvec4 m = mean(l);
+    for (int c = 0; c < 4; ++c) EXPECT_NEAR(m[c], m0[c], 1e-6);
+  }
+}
+
+TEST(TextureMip, PowerOfTwoLevelIsTheTwoByTwoBoxAverage) {
+  TextureLevel base;
+  base.width = 4;
+  base.height = 2;
+  for (int i = 0; i < 8; ++i) base.texels.emplace_back(float(i), 0.0f, 0.0f, 1.0f);
+  auto levels = buildMipChain(base);
+  ASSERT_EQ(levels.size(), 3u);
+  EXPECT_FLOAT_EQ(levels[1].texels[0].x, (0 + 1 + 4 + 5) / 4.0f);
+  EXPECT_FLOAT_EQ(levels[1].texels[1].x, (2 + 3 + 6 + 7) / 4.0f);
+  EXPECT_FLOAT_EQ(levels[2].texels[0].x, 3.5f);
+}
+
+TEST(TextureDecode, SrgbCodesDecodeExactly) {
+  for (int k = 0; k < 256; ++k) {
+    double c = k / 255.0;
+    double linear = c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4);
+    EXPECT_NEAR(srgbToLinear(static_cast<std::uint8_t>(k)), linear, 1e-7) << k;
+  }
+  // A PNG of every code (encodePng writes sRGB): each decodes to its code's linear value, alpha 1.
+  Image img(256, 1);
+  for (int k = 0; k < 256; ++k) img.at(k, 0) = glm::vec3(srgbToLinear(static_cast<std::uint8_t>(k)));
+  std::vector<std::uint8_t> png = encodePng(img);
+  TextureLevel l = decodeImage(png.data(), png.size(), "codes.png");
+  ASSERT_EQ(l.width, 256u);
+  for (int k = 0; k < 256; ++k) {
+    EXPECT_EQ(l.texels[k].x, srgbToLinear(static_cast<std::uint8_t>(k))) << k;
+    EXPECT_EQ(l.texels[k].w, 1.0f);
+  }
+}
+
+TEST(TextureWrap, RepeatClampMirror) {
+  EXPECT_EQ(wrapCoord(-1, 4, TextureWrap::Repeat), 3u);
+  EXPECT_EQ(wrapCoord(9, 4, TextureWrap::Repeat), 1u);
+  EXPECT_EQ(wrapCoord(-1, 4, TextureWrap::Clamp), 0u);
+  EXPECT_EQ(wrapCoord(9, 4, TextureWrap::Clamp), 3u);
+  EXPECT_EQ(wrapCoord(4, 4, TextureWrap::Mirror), 3u);
+  EXPECT_EQ(wrapCoord(-1, 4, TextureWrap::Mirror), 0u);
+  EXPECT_EQ(wrapCoord(9, 4, TextureWrap::Mirror), 1u);
+  Texture t;
+  TextureLevel l;
+  l.width = 2;
+  l.height = 1;
+  l.texels = {glm::vec4(0.0f), glm::vec4(1.0f)};
+  t.levels = {l};
+  EXPECT_EQ(sampleNearest(t, 0, {1.25, 0.5}).x, 0.0f); // repeat: 0.25
+  t.wrapS = TextureWrap::Clamp;
+  EXPECT_EQ(sampleNearest(t, 0, {1.25, 0.5}).x, 1.0f);
+  EXPECT_FLOAT_EQ(sampleBilinear(t, 0, {0.5, 0.5}).x, 0.5f);
+  t.wrapS = TextureWrap::Repeat;
+  EXPECT_FLOAT_EQ(sampleBilinear(t, 0, {0.0, 0.5}).x, 0.5f); // between the last and the first texel
+}
+
+TEST(TextureTransform, OffsetRotationScaleAsKhrTextureTransform) {
+  TextureTransform x;
+  x.offset = {0.5, 0.25};
+  x.scale = {2.0, 3.0};
+  glm::dvec2 p = x.apply({1.0, 1.0});
+  EXPECT_DOUBLE_EQ(p.x, 2.5);
+  EXPECT_DOUBLE_EQ(p.y, 3.25);
+  TextureTransform r;
+  r.rotation = std::acos(-1.0) / 2; // the extension's matrix (cos sin; -sin cos)
+  glm::dvec2 q = r.apply({1.0, 0.0});
+  EXPECT_NEAR(q.x, 0.0, 1e-12);
+  EXPECT_NEAR(q.y, -1.0, 1e-12);
+}
+
+TEST(TextureDataUri, Base64AndPercentEncoding) {
+  auto b = decodeDataUri("data:image/png;base64,aGVsbG8=", "x");
+  EXPECT_EQ(std::string(b.begin(), b.end()), "hello");
+  auto p = decodeDataUri("data:,a%20b", "x");
+  EXPECT_EQ(std::string(p.begin(), p.end()), "a b");
+  EXPECT_THROW(decodeDataUri("data:;base64,a$b", "x"), InputError);
+  EXPECT_THROW(decodeDataUri("data:,%4", "x"), InputError);
+  EXPECT_THROW(decodeDataUri("http://x", "x"), InputError);
+}
+
+TEST(TextureImport, BoxTexturedInAllThreeFormsHasTheTextureAndUvs) {
+  if (!haveBoxTextured()) GTEST_SKIP() << "assimp's test models are not installed";
+  Image png = readImage(kAssimp / "BoxTextured-glTF/CesiumLogoFlat.png");
+  for (const char* form : kBoxForms) {
+    SCOPED_TRACE(form);
+    Scene scene;
+    MeshRequest request;
+    request.file = kAssimp / form;
+    request.shownAs = form;
+    importMesh(request, scene);
+    ASSERT_EQ(scene.textures.size(), 1u);
+    const Texture& t = *scene.textures[0];
+    ASSERT_EQ(t.levels[0].width, png.width);
+    ASSERT_EQ(t.levels[0].height, png.height);
+    if (form == kBoxForms[0]) { // its sampler (the other two forms repeat)
+      EXPECT_EQ(t.wrapS, TextureWrap::Mirror);
+      EXPECT_EQ(t.wrapT, TextureWrap::Clamp);
+    }
+    EXPECT_EQ(t.levels.back().width, 1u);
+    for (std::uint32_t y = 0; y < png.height; y += 37)
+      for (std::uint32_t x = 0; x < png.width; x += 41)
+        for (int c = 0; c < 3; ++c) EXPECT_NEAR(t.levels[0].at(x, y)[c], png.at(x, y)[c], 2e-3);
+    for (const Triangle& tri : scene.triangles) EXPECT_TRUE(tri.uvs.has_value());
+    EXPECT_TRUE(analyzeScene(scene, scene.render).textures);
+  }
+}
+
+// A copy of BoxTextured.gltf in a scratch directory, with `png` (or no file) as its image.
+fs::path scratchBox(const std::string& name, const std::string* png) {
+  fs::path dir = fs::temp_directory_path() / ("vkray-texture-" + name);
+  fs::create_directories(dir);
+  fs::copy_file(kAssimp / "BoxTextured-glTF/BoxTextured.gltf", dir / "BoxTextured.gltf",
+                fs::copy_options::overwrite_existing);
+  fs::copy_file(kAssimp / "BoxTextured-glTF/BoxTextured0.bin", dir / "BoxTextured0.bin",
+                fs::copy_options::overwrite_existing);
+  fs::remove(dir / "CesiumLogoFlat.png");
+  if (png) std::ofstream(dir / "CesiumLogoFlat.png", std::ios::binary) << *png;
+  return dir / "BoxTextured.gltf";
+}
+
+std::string importError(const fs::path& file) {
+  Scene scene;
+  MeshRequest request;
+  request.file = file;
+  request.shownAs = file.filename().string();
+  try {
+    importMesh(request, scene);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(TextureBadInput, MissingUndecodableAndAbsurdImagesNameTheFile) {
+  if (!haveBoxTextured()) GTEST_SKIP() << "assimp's test models are not installed";
+  std::string missing = importError(scratchBox("missing", nullptr));
+  EXPECT_NE(missing.find("CesiumLogoFlat.png"), std::string::npos) << missing;
+  EXPECT_NE(missing.find("not found"), std::string::npos) << missing;
+  EXPECT_EQ(missing.find('\n'), std::string::npos);
+  std::string garbage = "this is not a PNG";
+  std::string bad = importError(scratchBox("garbage", &garbage));
+  EXPECT_NE(bad.find("CesiumLogoFlat.png"), std::string::npos) << bad;
+  EXPECT_NE(bad.find("not a PNG or JPEG"), std::string::npos) << bad;
+  // A PNG header claiming 17000 x 16 pixels (stb_image itself refuses much larger ones).
+  std::string huge("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x42\x68\0\0\0\x10\x08\x06\0\0\0\0\0\0\0", 33);
+  std::string absurd = importError(scratchBox("huge", &huge));
+  EXPECT_NE(absurd.find("CesiumLogoFlat.png"), std::string::npos) << absurd;
+  EXPECT_NE(absurd.find("larger than vkray accepts"), std::string::npos) << absurd;
+}
+
+// ---- GPU ---------------------------------------------------------------------------------------
+
+// Closest hit of a ray on the scene's triangles in double (Moller-Trumbore): the uv set 0 there.
+bool castUv(const Scene& s, glm::dvec3 o, glm::dvec3 d, glm::dvec2& uv) {
+  double best = INFINITY;
+  for (const Triangle& t : s.triangles) {
+    glm::dvec3 e1 = t.v[1] - t.v[0], e2 = t.v[2] - t.v[0];
+    glm::dvec3 p = glm::cross(d, e2);
+    double det = glm::dot(e1, p);
+    if (std::abs(det) < 1e-12) continue;
+    glm::dvec3 q = o - t.v[0];
+    double b1 = glm::dot(q, p) / det;
+    glm::dvec3 r = glm::cross(q, e1);
+    double b2 = glm::dot(d, r) / det;
+    double tt = glm::dot(e2, r) / det;
+    if (b1 < 0 || b2 < 0 || b1 + b2 > 1 || tt <= 0 || tt >= best) continue;
+    best = tt;
+    glm::dvec4 w = (1 - b1 - b2) * (*t.uvs)[0] + b1 * (*t.uvs)[1] + b2 * (*t.uvs)[2];
+    uv = glm::dvec2(w.x, w.y);
+  }
+  return best < INFINITY;
+}
+
+TEST(RenderTexture, SampledColoursMatchTheTextureOnBoxTextured) {
+  if (!haveBoxTextured()) GTEST_SKIP() << "assimp's test models are not installed";
+  // The PNG through image_io's own decoder: the oracle does not share texture.cpp's.
+  Image png = readImage(kAssimp / "BoxTextured-glTF/CesiumLogoFlat.png");
+  for (const char* form : kBoxForms) {
+    SCOPED_TRACE(form);
+    // Ambient light only: a pixel is ambient (0.8 for this material) x texel.
+    std::string json = R"({"camera": {"position": [0.35, 0.45, 2.2], "look_at": [0, 0, 0], "fov_y": 35},
+      "image": {"width": 64, "height": 64, "ambient": [1, 1, 1]},
+      "render": {"max_depth": 0, "texture_filter": "nearest"},
+      "objects": [{"type": "mesh", "file": ")" +
+                       (kAssimp / form).string() + R"("}]})";
+    Scene scene = sceneFromJson(json);
+    RenderResult r = render(scene);
+    EXPECT_TRUE(r.features.textures);
+    CameraFrame cam = makeCameraFrame(scene.camera, 64, 64);
+    int compared = 0, differing = 0;
+    for (std::uint32_t y = 0; y < 64; ++y) {
+      for (std::uint32_t x = 0; x < 64; ++x) {
+        glm::dvec2 uv;
+        glm::dvec3 d = glm::normalize(cam.rayDirection(x + 0.5, y + 0.5, 64, 64));
+        if (!castUv(scene, cam.position, d, uv)) continue;
+        // The file's sampler's wrap modes; texel borders, where float and double may differ, are skipped.
+        double fx = uv.x * png.width, fy = uv.y * png.height;
+        if (std::abs(fx - std::round(fx)) < 0.1 || std::abs(fy - std::round(fy)) < 0.1) continue;
+        auto ix = wrapCoord(static_cast<std::int64_t>(std::floor(fx)), png.width, scene.textures[0]->wrapS);
+        auto iy = wrapCoord(static_cast<std::int64_t>(std::floor(fy)), png.height, scene.textures[0]->wrapT);
+        glm::vec3 want = 0.8f * png.at(ix, iy);
+        glm::vec3 got = r.image.at(x, y);
+        ++compared;
+        if (glm::length(got - want) > 3e-3) ++differing;
+      }
+    }
+    EXPECT_GT(compared, 1500);
+    EXPECT_EQ(differing, 0) << "of " << compared;
+  }
+}
+
+TEST(RenderTexture, SpecializedAndAllFeaturesKernelsAgreeOnATexturedScene) {
+  if (!haveBoxTextured()) GTEST_SKIP() << "assimp's test models are not installed";
+  Scene scene = sceneFromJson(R"({"camera": {"position": [1.2, 1.4, 2.2], "look_at": [0, 0, 0]},
+      "image": {"width": 40, "height": 30},
+      "lights": [{"type": "point", "position": [3, 4, 5]}],
+      "objects": [{"type": "mesh", "file": ")" +
+                              (kAssimp / kBoxForms[1]).string() + R"("},
+                  {"type": "plane", "normal": [0, 1, 0], "offset": 0.5}]})");
+  RenderResult specialized = render(scene);
+  RenderOptions general;
+  general.specialize = false;
+  RenderResult everything = render(scene, general);
+  EXPECT_EQ(specialized.image.pixels, everything.image.pixels);
+  // Without the texture the same scene runs the texture-free kernel.
+  Scene plain = scene;
+  for (Material& m : plain.materials) m.baseColorTexture.reset();
+  EXPECT_FALSE(analyzeScene(plain, plain.render).textures);
+  EXPECT_NE(render(plain).image.pixels, specialized.image.pixels);
+}
+
+// A black and white checker texture repeated 64 times over a 40 x 40 square floor, seen at a
+// grazing angle: far away, many texels fall in a pixel. 256 point samples per pixel are the
+// reference; one cone-filtered sample should be much closer to it than one bilinear sample.
+Scene checkerFloor() {
+  Scene s;
+  s.camera.position = {0.0, 0.6, 6.0};
+  s.camera.lookAt = {0.0, 0.0, -20.0};
+  s.camera.fovY = 40.0;
+  s.render.width = 96;
+  s.render.height = 64;
+  s.render.maxDepth = 0;
+  s.ambientLight = glm::dvec3(1.0);
+  auto tex = std::make_shared<Texture>();
+  TextureLevel l; // 16 x 16 texels: a 2 x 2 checker of 8 x 8-texel squares
+  l.width = 16;
+  l.height = 16;
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 16; ++x)
+      l.texels.push_back(((x / 8 + y / 8) % 2 == 0) ? glm::vec4(1.0f) : glm::vec4(0, 0, 0, 1));
+  tex->levels = buildMipChain(l);
+  s.textures.push_back(tex);
+  Material m;
+  m.color = glm::dvec3(1.0);
+  m.ambient = 1.0;
+  m.diffuse = 0.0;
+  m.baseColorTexture = MaterialTexture{};
+  s.materials.push_back(m);
+  const double h = 20.0, tiles = 64.0;
+  glm::dvec3 p[4] = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
+  glm::dvec4 uv[4] = {{0, 0, 0, 0}, {tiles, 0, 0, 0}, {tiles, tiles, 0, 0}, {0, tiles, 0, 0}};
+  for (auto [a, b, c] : {std::array<int, 3>{0, 2, 1}, std::array<int, 3>{0, 3, 2}}) {
+    Triangle t;
+    t.v[0] = p[a];
+    t.v[1] = p[b];
+    t.v[2] = p[c];
+    t.uvs = std::array<glm::dvec4, 3>{uv[a], uv[b], uv[c]};
+    s.triangles.push_back(t);
+  }
+  return s;
+}
+
+TEST(RenderTexture, RayConesAtOneSampleAreCloserToTheReferenceThanBilinear) {
+  Scene s = checkerFloor();
+  s.render.textureFilter = TextureFilter::Nearest;
+  s.render.spp = 256;
+  Image reference = render(s).image;
+  s.render.spp = 1;
+  s.render.textureFilter = TextureFilter::Bilinear;
+  ImageError bilinear = compareImages(render(s).image, reference);
+  s.render.textureFilter = TextureFilter::Cone;
+  ImageError cone = compareImages(render(s).image, reference);
+  s.render.textureFilter = TextureFilter::Nearest;
+  ImageError nearest = compareImages(render(s).image, reference);
+  std::cout << "[ ray cones ] RMSE against 256-spp nearest: cone " << cone.rmse << ", bilinear " << bilinear.rmse
+            << ", nearest " << nearest.rmse << " (1 spp, 96 x 64)\n";
+  RecordProperty("cone_rmse", std::to_string(cone.rmse));
+  RecordProperty("bilinear_rmse", std::to_string(bilinear.rmse));
+  EXPECT_LT(cone.rmse, 0.75 * bilinear.rmse);
+}
+
+} // namespace
+} // namespace vkray
+
+namespace vkray {
+namespace {
+
+// A 1 x 1 quad in z = 0 (x in [x0, 1], y in [-1, 1]) with uv u = (x + 1) / 2, over a white wall at
+// z = -1, lit from the side so the quad's shadow falls on the wall. Its material's texture is 2 x 1
+// texels: the left one red with alpha 0, the right one green with alpha 1.
+Scene maskScene(double x0, bool mask) {
+  Scene s;
+  s.camera.position = {0.0, 0.0, 5.0};
+  s.camera.lookAt = {0.0, 0.0, 0.0};
+  s.camera.fovY = 50.0;
+  s.render.width = 64;
+  s.render.height = 48;
+  s.render.maxDepth = 0;
+  s.render.textureFilter = TextureFilter::Nearest;
+  s.ambientLight = glm::dvec3(0.1);
+  s.lights.push_back(PointLight{{2.5, 1.0, 3.0}, {1.0, 1.0, 1.0}, true});
+  auto tex = std::make_shared<Texture>();
+  TextureLevel l;
+  l.width = 2;
+  l.height = 1;
+  l.texels = {glm::vec4(1, 0, 0, 0), glm::vec4(0, 1, 0, 1)};
+  tex->levels = buildMipChain(l);
+  tex->wrapS = tex->wrapT = TextureWrap::Clamp;
+  s.textures.push_back(tex);
+  Material quad;
+  quad.color = glm::dvec3(1.0);
+  quad.baseColorTexture = MaterialTexture{};
+  if (mask) quad.alphaCutoff = 0.5;
+  Material wall;
+  wall.color = glm::dvec3(0.9);
+  s.materials = {quad, wall};
+  s.planes.push_back(Plane{{0, 0, 1}, 1.0, 1});
+  auto corner = [](double x, double y) { return glm::dvec4((x + 1) / 2, (1 - y) / 2, 0, 0); };
+  glm::dvec3 p[4] = {{x0, -1, 0}, {1, -1, 0}, {1, 1, 0}, {x0, 1, 0}};
+  for (auto [a, b, c] : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
+    Triangle t;
+    t.v[0] = p[a];
+    t.v[1] = p[b];
+    t.v[2] = p[c];
+    t.uvs = std::array<glm::dvec4, 3>{corner(p[a].x, p[a].y), corner(p[b].x, p[b].y), corner(p[c].x, p[c].y)};
+    t.material = 0;
+    s.triangles.push_back(t);
+  }
+  return s;
+}
+
+// The masked quad renders as the quad's opaque half alone, its shadow included: the cut-out half
+// is gone for eye rays and shadow rays alike (only pixels on the cut line may differ).
+TEST(RenderTexture, AlphaMaskCutsOutForEyeAndShadowRays) {
+  Scene masked = maskScene(-1.0, true);
+  EXPECT_TRUE(analyzeScene(masked, masked.render).alphaMask);
+  Image cut = test::render(masked).image;
+  Image half = test::render(maskScene(0.0, false)).image;
+  Image whole = test::render(maskScene(-1.0, false)).image;
+  int differ = 0, differWhole = 0;
+  for (std::size_t i = 0; i < cut.pixels.size(); ++i) {
+    differ += glm::length(cut.pixels[i] - half.pixels[i]) > 1e-5f;
+    differWhole += glm::length(cut.pixels[i] - whole.pixels[i]) > 1e-5f;
+  }
+  EXPECT_LE(differ, 2 * 48) << "beyond the pixels on the cut line";
+  EXPECT_GT(differWhole, 300) << "the cut-out half should show the wall and let light through";
+  Scene opaque = maskScene(-1.0, false);
+  EXPECT_FALSE(analyzeScene(opaque, opaque.render).alphaMask);
+}
+
+} // namespace
+} // namespace vkray
+
+namespace vkray {
+namespace {
+
+// A glTF triangle facing +z (x, y in [-1, 1]), with COLOR_0 (normalized unsigned bytes) or without.
+fs::path colouredTriangle(bool withColors) {
+  fs::path dir = fs::temp_directory_path() / "vkray-texture-colours";
+  fs::create_directories(dir);
+  const float pos[9] = {-1, -1, 0, 1, -1, 0, 0, 1, 0};
+  const std::uint8_t rgba[12] = {255, 128, 64, 255, 255, 128, 64, 255, 255, 128, 64, 255};
+  std::ofstream(dir / "tri.bin", std::ios::binary)
+      .write(reinterpret_cast<const char*>(pos), sizeof pos)
+      .write(reinterpret_cast<const char*>(rgba), sizeof rgba);
+  std::string attributes = withColors ? R"({"POSITION": 0, "COLOR_0": 1})" : R"({"POSITION": 0})";
+  fs::path file = dir / (withColors ? "coloured.gltf" : "plain.gltf");
+  std::ofstream(file) << R"({"asset": {"version": "2.0"}, "scenes": [{"nodes": [0]}], "nodes": [{"mesh": 0}],
+    "meshes": [{"primitives": [{"attributes": )"
+                      << attributes << R"(}]}],
+    "accessors": [
+      {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [-1, -1, 0], "max": [1, 1, 0]},
+      {"bufferView": 1, "componentType": 5121, "normalized": true, "count": 3, "type": "VEC4"}],
+    "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 12}],
+    "buffers": [{"uri": "tri.bin", "byteLength": 48}]})";
+  return file;
+}
+
+TEST(TextureVertexColours, Color0IsReadAsNormalizedLinearRgba) {
+  Scene scene;
+  MeshRequest request;
+  request.file = colouredTriangle(true);
+  request.shownAs = "coloured.gltf";
+  importMesh(request, scene);
+  ASSERT_EQ(scene.triangles.size(), 1u);
+  ASSERT_TRUE(scene.triangles[0].colors.has_value());
+  EXPECT_DOUBLE_EQ((*scene.triangles[0].colors)[1].y, 128 / 255.0);
+  EXPECT_TRUE(analyzeScene(scene, scene.render).vertexColors);
+}
+
+// Vertex colours multiply the base colour: the coloured triangle is the plain one times the colour.
+TEST(RenderTextureVertexColours, MultiplyTheBaseColour) {
+  auto sceneFor = [](bool colours) {
+    return sceneFromJson(R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]},
+      "image": {"width": 16, "height": 16}, "ambient": [1, 1, 1],
+      "lights": [{"type": "point", "position": [0.5, 0.5, 3]}],
+      "objects": [{"type": "mesh", "file": ")" +
+                         colouredTriangle(colours).string() + R"("}]})");
+  };
+  Image coloured = render(sceneFor(true)).image;
+  Image plain = render(sceneFor(false)).image;
+  glm::vec3 c = coloured.at(8, 9), p = plain.at(8, 9);
+  ASSERT_GT(p.x, 0.05f);
+  EXPECT_NEAR(c.x, p.x * 1.0f, 1e-5f);
+  EXPECT_NEAR(c.y, p.y * (128 / 255.0f), 1e-5f);
+  EXPECT_NEAR(c.z, p.z * (64 / 255.0f), 1e-5f);
+}
+
+} // namespace
+} // namespace vkray
+
+namespace vkray {
+namespace {
+
+// OBJ map_Kd: the MTL's image becomes the material's texture; vt's v (up) becomes uv's v (down).
+TEST(TextureObj, MapKdTexturesTheMaterialWithFlippedV) {
+  fs::path dir = fs::temp_directory_path() / "vkray-texture-obj";
+  fs::create_directories(dir);
+  fs::copy_file(fs::path(VKRAY_SOURCE_DIR) / "scenes/meshes/tiles.png", dir / "tiles.png",
+                fs::copy_options::overwrite_existing);
+  std::ofstream(dir / "quad.mtl") << "newmtl tiled\nKd 1 1 1\nmap_Kd tiles.png\n";
+  std::ofstream(dir / "lost.mtl") << "newmtl lost\nmap_Kd nowhere.png\n";
+  std::ofstream(dir / "quad.obj") << "mtllib quad.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n"
+                                     "vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nusemtl tiled\nf 1/1 2/2 3/3 4/4\n";
+  std::ofstream(dir / "lost.obj") << "mtllib lost.mtl\nv 0 0 0\nv 1 0 0\nv 1 1 0\nvt 0 0\nusemtl lost\nf 1 2 3\n";
+  Scene scene;
+  MeshRequest request;
+  request.file = dir / "quad.obj";
+  request.shownAs = "quad.obj";
+  importMesh(request, scene);
+  ASSERT_EQ(scene.textures.size(), 1u);
+  EXPECT_EQ(scene.textures[0]->levels[0].width, 64u);
+  ASSERT_EQ(scene.triangles.size(), 2u);
+  ASSERT_TRUE(scene.triangles[0].uvs.has_value());
+  EXPECT_EQ((*scene.triangles[0].uvs)[0], glm::dvec4(0, 1, 0, 0)); // vt 0 0: the image's bottom-left
+  EXPECT_EQ((*scene.triangles[0].uvs)[2], glm::dvec4(1, 0, 0, 0));
+  EXPECT_TRUE(analyzeScene(scene, scene.render).textures);
+  request.file = dir / "lost.obj";
+  std::string error = importError(request.file);
+  EXPECT_NE(error.find("nowhere.png: texture file not found"), std::string::npos) << error;
+}
+
+} // namespace
+} // namespace vkray
+
+namespace vkray {
+namespace {
+
+// Every bundled scene but the textured one gets the kernel without texture code: TEXTURES,
+// VERTEX_COLORS and ALPHA_MASK are off (tools/compare-renders and tools/count-jit-instructions
+// show those kernels unchanged); scenes/textured.json gets TEXTURES.
+TEST(TextureSpecialization, OnlyTheTexturedSceneCompilesTextureCode) {
+  for (const auto& entry : fs::directory_iterator(fs::path(VKRAY_SOURCE_DIR) / "scenes")) {
+    if (entry.path().extension() != ".json") continue;
+    SCOPED_TRACE(entry.path().string());
+    Scene scene = loadScene(entry.path());
+    Features f = analyzeScene(scene, scene.render);
+    vulkan::Specialization spec =
+        specializationFor(f, scene.render, RenderOptions{}, SceneShape{}, SceneMemoryUse{}, false, false);
+    bool textured = entry.path().filename() == "textured.json";
+    EXPECT_EQ(spec.values().at(gpu::kSpecTextures), textured ? 1u : 0u);
+    EXPECT_EQ(spec.values().at(gpu::kSpecVertexColors), 0u);
+    EXPECT_EQ(spec.values().at(gpu::kSpecAlphaMask), 0u);
+  }
+}
+
+} // namespace
+} // namespace vkray
