@@ -240,102 +240,44 @@ struct BvhWideNode {
 };
 
 #ifndef __cplusplus
+// clang-format off
 // Named reads of the records above, so kernels say what they read, not which vec4 slot holds it.
-vec3 baseColor(Material m) {
-  return m.color.rgb;
-}
-float ambientFactor(Material m) {
-  return m.color.a;
-}
-vec3 checkerColor(Material m) {
-  return m.color2.rgb;
-}
-float checkerSize(Material m) {
-  return m.color2.a;
-} // 0: no checker
-float diffuseFactor(Material m) {
-  return m.phong.x;
-}
-float specularFactor(Material m) {
-  return m.phong.y;
-}
-float phongExponent(Material m) {
-  return m.phong.z;
-}
-float reflectance(Material m) {
-  return m.phong.w;
-}
-float transmittance(Material m) {
-  return m.transmission.x;
-}
-float refractiveIndex(Material m) {
-  return m.transmission.y;
-}
-uint textureRefPlusOne(Material m) {
-  return floatBitsToUint(m.transmission.z);
-} // 0: untextured
-float alphaCutoff(Material m) {
-  return m.transmission.w;
-} // 0: not masked
-float baseAlpha(Material m) {
-  return m.absorption.a;
-}
-vec3 absorptionPerUnit(Material m) {
-  return m.absorption.rgb;
-}
+vec3 baseColor(Material m) { return m.color.rgb; }
+float ambientFactor(Material m) { return m.color.a; }
+vec3 checkerColor(Material m) { return m.color2.rgb; }
+float checkerSize(Material m) { return m.color2.a; } // 0: no checker
+float diffuseFactor(Material m) { return m.phong.x; }
+float specularFactor(Material m) { return m.phong.y; }
+float phongExponent(Material m) { return m.phong.z; }
+float reflectance(Material m) { return m.phong.w; }
+float transmittance(Material m) { return m.transmission.x; }
+float refractiveIndex(Material m) { return m.transmission.y; }
+uint textureRefPlusOne(Material m) { return floatBitsToUint(m.transmission.z); } // 0: untextured
+float alphaCutoff(Material m) { return m.transmission.w; } // 0: not masked
+float baseAlpha(Material m) { return m.absorption.a; }
+vec3 absorptionPerUnit(Material m) { return m.absorption.rgb; }
 
-vec3 lightPosition(Light l) {
-  return l.position.xyz;
-}
-bool castsShadows(Light l) {
-  return l.position.w > 0.0;
-}
-vec3 lightColor(Light l) {
-  return l.color.rgb;
-}
+vec3 lightPosition(Light l) { return l.position.xyz; }
+bool castsShadows(Light l) { return l.position.w > 0.0; }
+vec3 lightColor(Light l) { return l.color.rgb; }
 
-vec3 sphereCenter(Sphere s) {
-  return s.centerRadius.xyz;
-}
-float sphereRadius(Sphere s) {
-  return s.centerRadius.w;
-}
-uint sphereMaterial(Sphere s) {
-  return s.meta.x;
-}
+vec3 sphereCenter(Sphere s) { return s.centerRadius.xyz; }
+float sphereRadius(Sphere s) { return s.centerRadius.w; }
+uint sphereMaterial(Sphere s) { return s.meta.x; }
 
-vec3 planeNormal(Plane p) {
-  return p.normalOffset.xyz;
-}
-float planeOffset(Plane p) {
-  return p.normalOffset.w;
-}
-uint planeMaterial(Plane p) {
-  return p.meta.x;
-}
+vec3 planeNormal(Plane p) { return p.normalOffset.xyz; }
+float planeOffset(Plane p) { return p.normalOffset.w; }
+uint planeMaterial(Plane p) { return p.meta.x; }
 
-uint triangleMaterial(Triangle t) {
-  return floatBitsToUint(t.v0.w);
-}
-uint triangleNormalBase(Triangle t) {
-  return floatBitsToUint(t.v1.w);
-} // kNoNormals: flat
-uint triangleUvBasePlusOne(Triangle t) {
-  return floatBitsToUint(t.v2.w);
-} // 0: no texture coordinates
+uint triangleMaterial(Triangle t) { return floatBitsToUint(t.v0.w); }
+uint triangleNormalBase(Triangle t) { return floatBitsToUint(t.v1.w); } // kNoNormals: flat
+uint triangleUvBasePlusOne(Triangle t) { return floatBitsToUint(t.v2.w); } // 0: no texture coordinates
 
-vec3 polygonNormal(Polygon q) {
-  return q.plane.xyz;
-}
-uint polygonFirstVertex(Polygon q) {
-  return q.meta.x;
-}
-uint polygonVertexCount(Polygon q) {
-  return q.meta.y;
-}
-uint polygonMaterial(Polygon q) {
-  return q.meta.z;
-}
+vec3 polygonNormal(Polygon q) { return q.plane.xyz; }
+uint polygonFirstVertex(Polygon q) { return q.meta.x; }
+uint polygonVertexCount(Polygon q) { return q.meta.y; }
+uint polygonMaterial(Polygon q) { return q.meta.z; }
+// clang-format on
 #endif
 
 struct SceneUbo {
