@@ -30,9 +30,11 @@ const char* const kSupportedRequired[] = {"KHR_lights_punctual", "KHR_materials_
 
 // tinygltf hands over each image's encoded bytes (from a file, a data URI or a .glb buffer view);
 // they are kept as they are and decoded by vkray (scene/texture.h), only for images a material uses.
+// Bytes from a buffer view are not copied here: tinygltf does not check the view against its buffer
+// (a view past the buffer's end would be read out of bounds), so decodeGltfImage reads views itself.
 bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int, const unsigned char* bytes,
                     int size, void*) {
-  image->image.assign(bytes, bytes + size);
+  if (image->bufferView < 0 && size > 0) image->image.assign(bytes, bytes + size);
   image->as_is = true;
   return true;
 }
