@@ -1,4 +1,4 @@
-// libFuzzer target: the texture decoding path (scene/texture.h): data URI parsing, stb_image's PNG
+// libFuzzer target: the texture decoding path (scene/texture.h): data URI parsing, libpng's PNG
 // and JPEG decoders, the sRGB conversion and the mip chain. An input starting with "data:" is a
 // data URI, anything else image bytes. It must decode or be refused with vkray::InputError;
 // anything else (a crash, a sanitizer report, a hang) is a bug.

@@ -195,6 +195,22 @@ std::string importError(const fs::path& file) {
   return "";
 }
 
+// One PNG chunk: length, type, data and the CRC-32 (ISO 3309, as PNG's specification defines it)
+// over type and data, computed bit by bit.
+std::string pngChunk(const std::string& type, const std::string& data) {
+  std::uint32_t crc = 0xFFFFFFFFu;
+  for (char ch : type + data) {
+    crc ^= static_cast<std::uint8_t>(ch);
+    for (int k = 0; k < 8; ++k) crc = (crc >> 1) ^ (0xEDB88320u & (0u - (crc & 1u)));
+  }
+  crc ^= 0xFFFFFFFFu;
+  auto be32 = [](std::uint32_t v) {
+    return std::string{static_cast<char>(v >> 24), static_cast<char>(v >> 16), static_cast<char>(v >> 8),
+                       static_cast<char>(v)};
+  };
+  return be32(static_cast<std::uint32_t>(data.size())) + type + data + be32(crc);
+}
+
 TEST(TextureBadInput, MissingUndecodableAndAbsurdImagesNameTheFile) {
   if (!haveBoxTextured()) GTEST_SKIP() << "assimp's test models are not installed";
   std::string missing = importError(scratchBox("missing", nullptr));
@@ -205,8 +221,11 @@ TEST(TextureBadInput, MissingUndecodableAndAbsurdImagesNameTheFile) {
   std::string bad = importError(scratchBox("garbage", &garbage));
   EXPECT_NE(bad.find("CesiumLogoFlat.png"), std::string::npos) << bad;
   EXPECT_NE(bad.find("not a PNG or JPEG"), std::string::npos) << bad;
-  // A PNG header claiming 17000 x 16 pixels (stb_image itself refuses much larger ones).
-  std::string huge("\x89PNG\r\n\x1a\n\0\0\0\x0dIHDR\0\0\x42\x68\0\0\0\x10\x08\x06\0\0\0\0\0\0\0", 33);
+  // A well-formed PNG header (CRCs right, an empty IDAT) claiming 17000 x 16 pixels: refused by
+  // vkray's own limit before any pixel is decoded.
+  std::string huge("\x89PNG\r\n\x1a\n", 8);
+  huge += pngChunk("IHDR", std::string("\0\0\x42\x68\0\0\0\x10\x08\x06\0\0\0", 13));
+  huge += pngChunk("IDAT", "");
   std::string absurd = importError(scratchBox("huge", &huge));
   EXPECT_NE(absurd.find("CesiumLogoFlat.png"), std::string::npos) << absurd;
   EXPECT_NE(absurd.find("larger than vkray accepts"), std::string::npos) << absurd;

@@ -18,11 +18,8 @@
 #define STB_IMAGE_WRITE_IMPLEMENTATION
 #define STB_IMAGE_WRITE_STATIC
 #include <stb/stb_image_write.h>
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#include <stb/stb_image.h>
 
+#include "image/decode.h"
 #include "util/error.h"
 
 namespace vkray {
@@ -192,14 +189,16 @@ Image readPfm(const fs::path& path) {
 
 Image readImage(const fs::path& path) {
   if (imageFormatFor(path) == ImageFormat::Pfm) return readPfm(path);
-  int w = 0, h = 0, n = 0;
-  stbi_uc* data = stbi_load(path.c_str(), &w, &h, &n, 3);
-  if (!data) throw InputError(path.string(), std::string("cannot read PNG: ") + stbi_failure_reason());
-  Image img(static_cast<std::uint32_t>(w), static_cast<std::uint32_t>(h));
+  std::ifstream in(path, std::ios::binary);
+  std::error_code ec;
+  if (!in || fs::is_directory(path, ec)) throw InputError(path.string(), "cannot read the image file");
+  std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  Rgba8Image decoded = decodePngOrJpeg(bytes.data(), bytes.size(), path.string());
+  Image img(decoded.width, decoded.height);
   for (std::size_t i = 0; i < img.pixels.size(); ++i) {
-    for (int c = 0; c < 3; ++c) img.pixels[i][c] = srgbToLinear(data[i * 3 + static_cast<std::size_t>(c)] / 255.0f);
+    for (int c = 0; c < 3; ++c)
+      img.pixels[i][c] = srgbToLinear(decoded.rgba[i * 4 + static_cast<std::size_t>(c)] / 255.0f);
   }
-  stbi_image_free(data);
   return img;
 }
 

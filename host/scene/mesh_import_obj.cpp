@@ -169,7 +169,9 @@ MeshData readObj(const MeshRequest& request) {
     auto texture = std::make_shared<Texture>();
     texture->name = image.string();
     texture->levels = buildMipChain(readImageFile(image, image.string()));
-    data.materials[i].baseColorTexture = MaterialTexture{static_cast<std::uint32_t>(data.textures.size())};
+    MaterialTexture use;
+    use.texture = static_cast<std::uint32_t>(data.textures.size());
+    data.materials[i].baseColorTexture = use;
     data.textures.push_back(std::move(texture));
   }
   for (std::size_t i = 0; i + 1 < attrib.texcoords.size(); i += 2)

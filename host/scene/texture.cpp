@@ -7,28 +7,8 @@
 #include <fstream>
 #include <iterator>
 
+#include "image/decode.h"
 #include "util/error.h"
-
-// A static copy of the decoder (image_io.cpp and tinygltf have their own), PNG and JPEG only: the
-// formats glTF allows; the others stay out of reach of untrusted files.
-#define STB_IMAGE_IMPLEMENTATION
-#define STB_IMAGE_STATIC
-#define STBI_ONLY_PNG
-#define STBI_ONLY_JPEG
-#define STBI_NO_STDIO
-#if defined(__clang__)
-#pragma clang diagnostic push
-#pragma clang diagnostic ignored "-Wunused-function"
-#elif defined(__GNUC__)
-#pragma GCC diagnostic push
-#pragma GCC diagnostic ignored "-Wunused-function"
-#endif
-#include <stb/stb_image.h>
-#if defined(__clang__)
-#pragma clang diagnostic pop
-#elif defined(__GNUC__)
-#pragma GCC diagnostic pop
-#endif
 
 namespace vkray {
 
@@ -120,32 +100,16 @@ float srgbToLinear(std::uint8_t code) {
 }
 
 TextureLevel decodeImage(const std::uint8_t* bytes, std::size_t size, const std::string& shownAs) {
-  if (size == 0) throw InputError(shownAs, "the image is empty");
   if (size > 0x7FFFFFFFu) throw InputError(shownAs, "the image is larger than 2 GiB");
-  int w = 0, h = 0, channels = 0;
-  if (!stbi_info_from_memory(bytes, static_cast<int>(size), &w, &h, &channels)) {
-    throw InputError(shownAs, std::string("not a PNG or JPEG image vkray can decode (") + stbi_failure_reason() + ")");
-  }
-  if (w <= 0 || h <= 0 || static_cast<std::uint32_t>(w) > kMaxTextureSide ||
-      static_cast<std::uint32_t>(h) > kMaxTextureSide ||
-      static_cast<std::uint64_t>(w) * static_cast<std::uint64_t>(h) > kMaxTextureTexels) {
-    throw InputError(shownAs, "image of " + std::to_string(w) + " x " + std::to_string(h) +
-                                  " pixels is larger than vkray accepts (" + std::to_string(kMaxTextureSide) +
-                                  " per side, " + std::to_string(kMaxTextureTexels >> 20) + " Mi texels)");
-  }
-  stbi_uc* pixels = stbi_load_from_memory(bytes, static_cast<int>(size), &w, &h, &channels, 4);
-  if (!pixels) {
-    throw InputError(shownAs, std::string("not a PNG or JPEG image vkray can decode (") + stbi_failure_reason() + ")");
-  }
+  Rgba8Image decoded = decodePngOrJpeg(bytes, size, shownAs, DecodeLimits{kMaxTextureSide, kMaxTextureTexels});
   TextureLevel level;
-  level.width = static_cast<std::uint32_t>(w);
-  level.height = static_cast<std::uint32_t>(h);
+  level.width = decoded.width;
+  level.height = decoded.height;
   level.texels.resize(std::size_t(level.width) * level.height);
   for (std::size_t i = 0; i < level.texels.size(); ++i) {
-    const stbi_uc* p = pixels + 4 * i;
+    const std::uint8_t* p = decoded.rgba.data() + 4 * i;
     level.texels[i] = glm::vec4(srgbToLinear(p[0]), srgbToLinear(p[1]), srgbToLinear(p[2]), p[3] / 255.0f);
   }
-  stbi_image_free(pixels);
   return level;
 }
 

@@ -41,8 +41,8 @@ inline constexpr std::uint64_t kMaxTextureTexels = 64ull << 20;
 // sRGB transfer function, inverse (IEC 61966-2-1): 8-bit code to linear.
 float srgbToLinear(std::uint8_t code);
 
-// Decodes PNG or JPEG bytes (stb_image) into level 0: colour from sRGB to linear, alpha kept
-// linear. InputError naming `shownAs` for undecodable data or an absurd size.
+// Decodes PNG or JPEG bytes (libpng, libjpeg-turbo: image/decode.h) into level 0: colour from sRGB to linear, alpha
+// kept linear. InputError naming `shownAs` for undecodable data or an absurd size.
 TextureLevel decodeImage(const std::uint8_t* bytes, std::size_t size, const std::string& shownAs);
 // The same from a file (InputError when it cannot be read).
 TextureLevel readImageFile(const std::filesystem::path& file, const std::string& shownAs);
