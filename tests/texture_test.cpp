@@ -11,6 +11,7 @@
 #include <fstream>
 #include <iostream>
 #include <random>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -370,6 +371,92 @@ TEST(RenderTexture, RayConesAtOneSampleAreCloserToTheReferenceThanBilinear) {
   RecordProperty("cone_rmse", std::to_string(cone.rmse));
   RecordProperty("bilinear_rmse", std::to_string(bilinear.rmse));
   EXPECT_LT(cone.rmse, 0.75 * bilinear.rmse);
+}
+
+// The checker floor with a texture whose every mip level is one flat grey, level k at (k + 1) / 16:
+// the pixel's colour says which levels the sampler read and whether it blended them.
+Scene levelFloor(TextureMinFilter minFilter) {
+  Scene s = checkerFloor();
+  auto tex = std::make_shared<Texture>(*s.textures[0]);
+  for (std::size_t k = 0; k < tex->levels.size(); ++k) {
+    for (auto& t : tex->levels[k].texels) t = glm::vec4(glm::vec3(float(k + 1) / 16.0f), 1.0f);
+  }
+  tex->minFilter = minFilter;
+  s.textures[0] = tex;
+  s.render.textureFilter = TextureFilter::Cone;
+  return s;
+}
+
+// The floor's pixels: those the untextured floor (white, ambient 1) renders white.
+std::vector<bool> floorPixels() {
+  Scene s = checkerFloor();
+  s.materials[0].baseColorTexture.reset();
+  Image plain = render(s).image;
+  std::vector<bool> mask;
+  for (const glm::vec3& p : plain.pixels) mask.push_back(std::abs(p.r - 1.0f) < 1e-4f);
+  return mask;
+}
+
+// The floor pixels' greys, in sixteenths, and the share of them not, within 1e-4, one level's grey
+// (blends fall between them).
+struct LevelsSeen {
+  std::set<long> greys;
+  double blendedShare = 0.0;
+};
+
+LevelsSeen levelsSeen(const Image& image, const std::vector<bool>& floor, std::size_t levels) {
+  LevelsSeen seen;
+  std::size_t blended = 0, n = 0;
+  for (std::size_t i = 0; i < image.pixels.size(); ++i) {
+    if (!floor[i]) continue;
+    const float r = image.pixels[i].r;
+    bool onLevel = false;
+    for (std::size_t k = 0; k < levels; ++k) onLevel |= std::abs(r - float(k + 1) / 16.0f) < 1e-4f;
+    blended += onLevel ? 0 : 1;
+    seen.greys.insert(std::lround(r * 16.0f));
+    ++n;
+  }
+  seen.blendedShare = double(blended) / double(std::max<std::size_t>(n, 1));
+  return seen;
+}
+
+TEST(RenderTexture, MinFilterChoosesTheLevelsASampleReads) {
+  const std::size_t levels = checkerFloor().textures[0]->levels.size();
+  const std::vector<bool> floor = floorPixels();
+  ASSERT_GT(std::count(floor.begin(), floor.end(), true), 1000);
+  // The default blends the two levels around the cone's: much of the floor is between two greys.
+  LevelsSeen trilinear = levelsSeen(render(levelFloor(TextureMinFilter::Trilinear)).image, floor, levels);
+  EXPECT_GT(trilinear.blendedShare, 0.3);
+  // MIPMAP_NEAREST reads one level: every floor pixel is exactly one level's grey, and several
+  // levels are seen across the receding floor.
+  for (TextureMinFilter f : {TextureMinFilter::NearestLevel, TextureMinFilter::NearestLevelNearest}) {
+    LevelsSeen one = levelsSeen(render(levelFloor(f)).image, floor, levels);
+    EXPECT_EQ(one.blendedShare, 0.0);
+    EXPECT_GE(one.greys.size(), 3u);
+  }
+  // No mipmaps: the image itself everywhere, so the whole floor is level 0's grey.
+  for (TextureMinFilter f : {TextureMinFilter::Linear, TextureMinFilter::Nearest}) {
+    LevelsSeen none = levelsSeen(render(levelFloor(f)).image, floor, levels);
+    EXPECT_EQ(none.blendedShare, 0.0);
+    EXPECT_EQ(none.greys, std::set<long>{1});
+  }
+}
+
+// minFilter LINEAR under the cone filter samples as the global bilinear filter does, texel for texel,
+// on the real checker (the cone's level choice is then unused).
+TEST(RenderTexture, MinFilterLinearEqualsTheBilinearFilter) {
+  Scene s = checkerFloor();
+  auto tex = std::make_shared<Texture>(*s.textures[0]);
+  tex->minFilter = TextureMinFilter::Linear;
+  s.render.textureFilter = TextureFilter::Bilinear;
+  Image bilinear = render(s).image;
+  s.textures[0] = tex;
+  s.render.textureFilter = TextureFilter::Cone;
+  Image linear = render(s).image;
+  EXPECT_EQ(compareImages(linear, bilinear).maxAbs, 0.0);
+  // ... while the default minFilter, trilinear, does not (the test can tell them apart).
+  tex->minFilter = TextureMinFilter::Trilinear;
+  EXPECT_GT(compareImages(render(s).image, bilinear).maxAbs, 0.05);
 }
 
 } // namespace

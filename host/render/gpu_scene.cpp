@@ -150,8 +150,18 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     double det = std::abs(row0.x * row1.y - row0.y * row1.x);
     double texels = double(tex.levels[0].width) * tex.levels[0].height * std::max(det, 1e-30);
     auto bits = [](double v) { return std::bit_cast<std::uint32_t>(static_cast<float>(v)); };
-    std::uint32_t wrap =
-        static_cast<std::uint32_t>(tex.wrapS) | static_cast<std::uint32_t>(tex.wrapT) << 2 | (tex.nearest ? 16u : 0u);
+    // Sampler bits as texture.glsl reads them: wrap s (0-1), wrap t (2-3), nearest magnification (4),
+    // the minification's levels (5-6: 0 two blended, 1 the nearest one, 2 the image alone) and
+    // nearest texels when minified (7).
+    const TextureMinFilter mf = tex.minFilter;
+    const std::uint32_t minLevels = mf == TextureMinFilter::NearestLevel || mf == TextureMinFilter::NearestLevelNearest
+                                        ? 1u
+                                    : mf == TextureMinFilter::Linear || mf == TextureMinFilter::Nearest ? 2u
+                                                                                                        : 0u;
+    const bool minNearest = mf == TextureMinFilter::NearestBetweenLevels ||
+                            mf == TextureMinFilter::NearestLevelNearest || mf == TextureMinFilter::Nearest;
+    std::uint32_t wrap = static_cast<std::uint32_t>(tex.wrapS) | static_cast<std::uint32_t>(tex.wrapT) << 2 |
+                         (tex.nearest ? 16u : 0u) | minLevels << 5 | (minNearest ? 128u : 0u);
     refs.emplace_back(firstLevel[bt->texture], static_cast<std::uint32_t>(tex.levels.size()), wrap, bt->texCoord);
     refs.emplace_back(bits(row0.x), bits(row0.y), bits(row0.z), bits(0.5 * std::log2(texels)));
     refs.emplace_back(bits(row1.x), bits(row1.y), bits(row1.z), 0u);

@@ -39,6 +39,23 @@ bool keepImageBytes(tinygltf::Image* image, const int, std::string*, std::string
   return true;
 }
 
+TextureMinFilter minFilter(int gl) {
+  switch (gl) {
+  case TINYGLTF_TEXTURE_FILTER_NEAREST:
+    return TextureMinFilter::Nearest;
+  case TINYGLTF_TEXTURE_FILTER_LINEAR:
+    return TextureMinFilter::Linear;
+  case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_NEAREST:
+    return TextureMinFilter::NearestLevelNearest;
+  case TINYGLTF_TEXTURE_FILTER_LINEAR_MIPMAP_NEAREST:
+    return TextureMinFilter::NearestLevel;
+  case TINYGLTF_TEXTURE_FILTER_NEAREST_MIPMAP_LINEAR:
+    return TextureMinFilter::NearestBetweenLevels;
+  default: // LINEAR_MIPMAP_LINEAR, or undefined (-1): the best the kernel has
+    return TextureMinFilter::Trilinear;
+  }
+}
+
 TextureWrap wrapMode(int gl) {
   if (gl == TINYGLTF_TEXTURE_WRAP_CLAMP_TO_EDGE) return TextureWrap::Clamp;
   if (gl == TINYGLTF_TEXTURE_WRAP_MIRRORED_REPEAT) return TextureWrap::Mirror;
@@ -772,6 +789,7 @@ private:
       texture->wrapS = wrapMode(smp.wrapS);
       texture->wrapT = wrapMode(smp.wrapT);
       texture->nearest = smp.magFilter == TINYGLTF_TEXTURE_FILTER_NEAREST;
+      texture->minFilter = minFilter(smp.minFilter);
     }
     mt.texture = static_cast<std::uint32_t>(data_.textures.size());
     textureIndex_[key] = mt.texture;

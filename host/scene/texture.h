@@ -15,6 +15,17 @@ namespace vkray {
 
 enum class TextureWrap : std::uint32_t { Repeat = 0, Clamp = 1, Mirror = 2 }; // values as the kernel reads them
 
+// What a minified texture's footprint reads, as glTF's sampler minFilter names it (the ray cone
+// still picks the level). Trilinear is LINEAR_MIPMAP_LINEAR and the default when a file says nothing.
+enum class TextureMinFilter : std::uint32_t {
+  Trilinear,            // bilinear in the two levels around the cone's level, blended
+  NearestBetweenLevels, // NEAREST_MIPMAP_LINEAR: the nearest texel in each of the two levels, blended
+  NearestLevel,         // LINEAR_MIPMAP_NEAREST: bilinear in the one level nearest the cone's
+  NearestLevelNearest,  // NEAREST_MIPMAP_NEAREST
+  Linear,               // LINEAR: no mipmaps, bilinear in the image itself
+  Nearest,              // NEAREST: no mipmaps, the nearest texel of the image itself
+};
+
 struct TextureLevel {
   std::uint32_t width = 0;
   std::uint32_t height = 0;
@@ -29,6 +40,7 @@ struct Texture {
   TextureWrap wrapS = TextureWrap::Repeat;
   TextureWrap wrapT = TextureWrap::Repeat;
   bool nearest = false; // the file asks for nearest magnification (glTF sampler magFilter NEAREST)
+  TextureMinFilter minFilter = TextureMinFilter::Trilinear;
 
   std::size_t texelCount() const;
 };

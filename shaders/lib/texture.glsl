@@ -70,10 +70,19 @@ vec4 baseColorTexelAt(uint ref, vec4 uvs, vec2 uvLodBias, float footprint) {
   float lod = (set1 ? uvLodBias.y : uvLodBias.x) + uintBitsToFloat(row0.w) + log2(max(footprint, 1e-30));
   if (nearest && lod <= 0.0) return sampleLevelNearest(base, w); // magnified: the sampler's filter
   lod = clamp(lod, 0.0, float(head.y - 1u));
+  // Minified, the sampler's minFilter (gpu_scene.cpp packs it): which levels, and which texels in them.
+  uint minLevels = (head.z >> 5u) & 3u;
+  bool minNearest = lod > 0.0 && (head.z & 128u) != 0u;
+  if (lod > 0.0 && minLevels != 0u) {
+    uvec4 level = minLevels == 2u ? base : texelFetch(textureInfoTexels, int(head.x + uint(lod + 0.5)));
+    return minNearest ? sampleLevelNearest(level, w) : sampleLevelBilinear(level, w, wrapS, wrapT);
+  }
   uint l0 = uint(lod);
   uint l1 = min(l0 + 1u, head.y - 1u);
-  vec4 a = sampleLevelBilinear(texelFetch(textureInfoTexels, int(head.x + l0)), w, wrapS, wrapT);
-  vec4 b = sampleLevelBilinear(texelFetch(textureInfoTexels, int(head.x + l1)), w, wrapS, wrapT);
+  uvec4 level0 = texelFetch(textureInfoTexels, int(head.x + l0));
+  uvec4 level1 = texelFetch(textureInfoTexels, int(head.x + l1));
+  vec4 a = minNearest ? sampleLevelNearest(level0, w) : sampleLevelBilinear(level0, w, wrapS, wrapT);
+  vec4 b = minNearest ? sampleLevelNearest(level1, w) : sampleLevelBilinear(level1, w, wrapS, wrapT);
   return mix(a, b, lod - float(l0));
 }
 
