@@ -93,17 +93,23 @@ dvec3 meshCentre(const Scene& scene, const NamedObject& o) {
   return o.count > 0 ? 0.5 * (lo + hi) : dvec3(0.0);
 }
 
+// The scene's object or light called `name`; refused at `keys` with the names there are.
+template <class Named>
+typename std::vector<Named>::const_iterator findNamed(const std::vector<Named>& named, const std::string& name,
+                                                      const JsonNode& keys, const std::string& what) {
+  auto it = std::find_if(named.begin(), named.end(), [&](const Named& n) { return n.name == name; });
+  if (it == named.end()) {
+    std::string known;
+    for (const Named& n : named) known += (known.empty() ? "" : ", ") + n.name;
+    keys.fail("no " + what + " is named '" + name + "'" +
+              (known.empty() ? " (no " + what + " has a \"name\")" : " (named " + what + "s: " + known + ")"));
+  }
+  return it;
+}
+
 void readObjectKeys(const JsonNode& node, const Scene& scene, Animation& a) {
   for (auto& [name, keys] : node.members()) {
-    const auto& wanted = name; // clang before 16 cannot capture a structured binding in a lambda
-    auto it = std::find_if(scene.namedObjects.begin(), scene.namedObjects.end(),
-                           [&](const NamedObject& o) { return o.name == wanted; });
-    if (it == scene.namedObjects.end()) {
-      std::string known;
-      for (const NamedObject& o : scene.namedObjects) known += (known.empty() ? "" : ", ") + o.name;
-      keys.fail("no object is named '" + name + "'" +
-                (known.empty() ? " (no object has a \"name\")" : " (named objects: " + known + ")"));
-    }
+    auto it = findNamed(scene.namedObjects, name, keys, "object");
     ObjectTracks tracks;
     tracks.name = name;
     tracks.path = keys.path();
@@ -137,15 +143,7 @@ void readObjectKeys(const JsonNode& node, const Scene& scene, Animation& a) {
 
 void readLightKeys(const JsonNode& node, const Scene& scene, Animation& a) {
   for (auto& [name, keys] : node.members()) {
-    const auto& wanted = name; // as above
-    auto it = std::find_if(scene.namedLights.begin(), scene.namedLights.end(),
-                           [&](const NamedLight& l) { return l.name == wanted; });
-    if (it == scene.namedLights.end()) {
-      std::string known;
-      for (const NamedLight& l : scene.namedLights) known += (known.empty() ? "" : ", ") + l.name;
-      keys.fail("no light is named '" + name + "'" +
-                (known.empty() ? " (no light has a \"name\")" : " (named lights: " + known + ")"));
-    }
+    auto it = findNamed(scene.namedLights, name, keys, "light");
     LightTracks tracks;
     tracks.name = name;
     tracks.path = keys.path();
