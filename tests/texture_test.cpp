@@ -620,6 +620,22 @@ TEST(TextureObj, MapKdTexturesTheMaterialWithFlippedV) {
   EXPECT_NE(error.find("nowhere.png: texture file not found"), std::string::npos) << error;
 }
 
+// assimp's spider: an MTL written on Windows ("map_Kd .\\SpiderTex.jpg") with five JPEG textures.
+TEST(TextureObj, WindowsSeparatorsInMapKdFindTheImages) {
+  const fs::path spider = "/usr/share/assimp/models/OBJ/spider.obj";
+  if (!fs::exists(spider)) GTEST_SKIP() << "assimp's test models are not installed";
+  Scene scene;
+  MeshRequest request;
+  request.file = spider;
+  request.shownAs = "spider.obj";
+  importMesh(request, scene);
+  ASSERT_EQ(scene.textures.size(), 5u);
+  for (const auto& texture : scene.textures) {
+    EXPECT_EQ(texture->name.find('\\'), std::string::npos) << texture->name;
+    EXPECT_GT(texture->levels[0].width, 1u) << texture->name;
+  }
+}
+
 } // namespace
 } // namespace vkray
 

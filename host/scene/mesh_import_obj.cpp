@@ -164,6 +164,12 @@ MeshData readObj(const MeshRequest& request) {
   for (std::size_t i = 0; i < materials.size(); ++i) {
     if (materials[i].diffuse_texname.empty()) continue;
     std::filesystem::path image = request.file.parent_path() / materials[i].diffuse_texname;
+    if (!std::filesystem::exists(image)) {
+      // MTL files written on Windows name textures with backslashes (".\\wood.jpg").
+      std::string portable = materials[i].diffuse_texname;
+      std::replace(portable.begin(), portable.end(), '\\', '/');
+      if (std::filesystem::exists(request.file.parent_path() / portable)) image = request.file.parent_path() / portable;
+    }
     if (!std::filesystem::exists(image))
       throw InputError(image.string(), "texture file not found (map_Kd of " + where + ")");
     auto texture = std::make_shared<Texture>();
