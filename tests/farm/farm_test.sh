@@ -28,7 +28,15 @@ fail() {
 
 scene="$src/scenes/showcase-turntable.json"
 size=(--width 96 --height 64)
-eval "$("$src/tools/farm/slurm-local" start)"
+# A bad command line is refused before anything is submitted: zero tiles is no tiling.
+rc=0
+"$src/tools/farm/submit-slurm" "$scene" --frames 0-0 --tiles 0 --out "$tmp/zero" --vkray "$vkray" 2>"$tmp/zero.err" || rc=$?
+[ "$rc" = 2 ] && grep -q "^submit-slurm: --tiles: expected a whole number >= 1, got '0'$" "$tmp/zero.err" ||
+  fail "--tiles 0: expected exit 2 naming --tiles, got $rc: $(cat "$tmp/zero.err")"
+
+# eval "$(...)" would succeed on a failed start (eval of nothing): take its output first.
+started="$("$src/tools/farm/slurm-local" start)" || fail "tools/farm/slurm-local start failed (its message is above)"
+eval "$started"
 
 # The oracle: one local process, every frame, and frame 4's tiles.
 mkdir -p "$tmp/local"
