@@ -1,6 +1,9 @@
 // Tile files and merge: the bands of an image join back into it exactly; tiles that do not belong
 // together (another fingerprint, size or frame), overlap or leave a gap are refused, naming the tile.
+// The scene fingerprint tells renders apart by everything their pixels depend on.
 #include <filesystem>
+#include <functional>
+#include <memory>
 
 #include <gtest/gtest.h>
 
@@ -8,6 +11,8 @@
 
 #include "image/image_io.h"
 #include "image/tile_io.h"
+#include "scene/scene_fingerprint.h"
+#include "scene/texture.h"
 #include "util/error.h"
 
 namespace vkray {
@@ -106,6 +111,71 @@ TEST_F(TileMerge, RefusesATileWithoutItsDescription) {
   auto a = tile("a.pfm", 0, 10);
   fs::remove(tileSidecarPath(a));
   EXPECT_NE(refusal({a}).find("no tile description"), std::string::npos) << refusal({a});
+}
+
+// One triangle with uvs and vertex colours; its material textured by a 2 x 2 image and cut out by alpha.
+Scene texturedTriangle() {
+  Scene s;
+  TextureLevel image;
+  image.width = 2;
+  image.height = 2;
+  image.texels = {glm::vec4(1, 0, 0, 1), glm::vec4(0, 1, 0, 1), glm::vec4(0, 0, 1, 0.5f), glm::vec4(1, 1, 1, 0)};
+  auto texture = std::make_shared<Texture>();
+  texture->levels = buildMipChain(image);
+  s.textures.push_back(texture);
+  Material m;
+  m.baseColorTexture = MaterialTexture{};
+  m.alphaCutoff = 0.5;
+  s.materials.push_back(m);
+  Triangle t;
+  t.v[0] = glm::dvec3(0, 0, 0);
+  t.v[1] = glm::dvec3(1, 0, 0);
+  t.v[2] = glm::dvec3(0, 1, 0);
+  t.uvs = std::array<glm::dvec4, 3>{glm::dvec4(0, 0, 0, 0), glm::dvec4(1, 0, 0, 0), glm::dvec4(0, 1, 0, 0)};
+  t.colors = std::array<glm::dvec4, 3>{glm::dvec4(1), glm::dvec4(1), glm::dvec4(1)};
+  s.triangles.push_back(t);
+  return s;
+}
+
+// The texture of `s`, copied so that it can be changed (scenes share their textures).
+Texture& ownTexture(Scene& s) {
+  auto copy = std::make_shared<Texture>(*s.textures[0]);
+  s.textures[0] = copy;
+  return *copy;
+}
+
+TEST(SceneFingerprint, EqualScenesAgree) {
+  // Built twice: equal contents in other objects (the textures are not the same pointer).
+  EXPECT_EQ(sceneFingerprint(texturedTriangle(), 0), sceneFingerprint(texturedTriangle(), 0));
+}
+
+TEST(SceneFingerprint, EveryTextureInputTellsScenesApart) {
+  const std::string base = sceneFingerprint(texturedTriangle(), 0);
+  const std::vector<std::pair<const char*, std::function<void(Scene&)>>> changes = {
+      {"texture filter", [](Scene& s) { s.render.textureFilter = TextureFilter::Nearest; }},
+      {"a texel", [](Scene& s) { ownTexture(s).levels[0].texels[3].x = 0.5f; }},
+      {"a texel's alpha", [](Scene& s) { ownTexture(s).levels[0].texels[0].w = 0.75f; }},
+      {"wrap", [](Scene& s) { ownTexture(s).wrapS = TextureWrap::Clamp; }},
+      {"magnification", [](Scene& s) { ownTexture(s).nearest = true; }},
+      {"minification", [](Scene& s) { ownTexture(s).minFilter = TextureMinFilter::Nearest; }},
+      {"no texture", [](Scene& s) { s.materials[0].baseColorTexture.reset(); }},
+      {"uv set", [](Scene& s) { s.materials[0].baseColorTexture->texCoord = 1; }},
+      {"texture offset", [](Scene& s) { s.materials[0].baseColorTexture->transform.offset.x = 0.5; }},
+      {"texture rotation", [](Scene& s) { s.materials[0].baseColorTexture->transform.rotation = 0.5; }},
+      {"texture scale", [](Scene& s) { s.materials[0].baseColorTexture->transform.scale.y = 2.0; }},
+      {"alpha cutoff", [](Scene& s) { s.materials[0].alphaCutoff = 0.25; }},
+      {"alpha", [](Scene& s) { s.materials[0].alpha = 0.5; }},
+      {"a uv", [](Scene& s) { (*s.triangles[0].uvs)[2].y = 0.5; }},
+      {"second uv set", [](Scene& s) { (*s.triangles[0].uvs)[1].z = 0.5; }},
+      {"no uvs", [](Scene& s) { s.triangles[0].uvs.reset(); }},
+      {"a vertex colour", [](Scene& s) { (*s.triangles[0].colors)[0].g = 0.5; }},
+      {"no vertex colours", [](Scene& s) { s.triangles[0].colors.reset(); }},
+  };
+  for (const auto& [what, change] : changes) {
+    Scene s = texturedTriangle();
+    change(s);
+    EXPECT_NE(sceneFingerprint(s, 0), base) << what;
+  }
 }
 
 } // namespace

@@ -19,6 +19,21 @@ public:
       h_ *= 0x100000001b3ull;
     }
   }
+  // Bulk data (texels), a 64-bit word at a time: 8 times fewer steps than bytes(). The xor-shift
+  // after each multiply carries a word's high bits down, which the multiply alone never does; each
+  // step is a bijection of the state for a fixed word and of the word for a fixed state, so inputs
+  // that differ in one word always hash apart.
+  void words(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    std::size_t i = 0;
+    for (; i + 8 <= n; i += 8) {
+      std::uint64_t w;
+      std::memcpy(&w, p + i, sizeof w);
+      h_ = (h_ ^ w) * 0x100000001b3ull;
+      h_ ^= h_ >> 32;
+    }
+    bytes(p + i, n - i);
+  }
   void u64(std::uint64_t v) { bytes(&v, sizeof v); }
   void f64(double v) {
     if (v == 0.0) v = 0.0; // -0 and +0 render alike
@@ -26,10 +41,18 @@ public:
     std::memcpy(&bits, &v, sizeof bits);
     u64(bits);
   }
+  void vec(const glm::dvec2& v) {
+    f64(v.x);
+    f64(v.y);
+  }
   void vec(const glm::dvec3& v) {
     f64(v.x);
     f64(v.y);
     f64(v.z);
+  }
+  void vec(const glm::dvec4& v) {
+    vec(glm::dvec3(v));
+    f64(v.w);
   }
   std::uint64_t value() const { return h_; }
 
@@ -37,11 +60,30 @@ private:
   std::uint64_t h_ = 0xcbf29ce484222325ull;
 };
 
+// A decoded texture: its sampling and its image. The mip levels below level 0 are built from it
+// (buildMipChain), so their sizes stand for them.
+void hashTexture(Hasher& h, const Texture& t) {
+  h.u64(static_cast<std::uint64_t>(t.wrapS));
+  h.u64(static_cast<std::uint64_t>(t.wrapT));
+  h.u64(t.nearest ? 1 : 0);
+  h.u64(static_cast<std::uint64_t>(t.minFilter));
+  h.u64(t.levels.size());
+  for (const TextureLevel& level : t.levels) {
+    h.u64(level.width);
+    h.u64(level.height);
+  }
+  if (!t.levels.empty()) {
+    const auto& texels = t.levels[0].texels;
+    h.u64(texels.size());
+    h.words(texels.data(), texels.size() * sizeof(glm::vec4));
+  }
+}
+
 } // namespace
 
 std::string sceneFingerprint(const Scene& s, int frame) {
   Hasher h;
-  h.u64(1); // encoding version
+  h.u64(2); // encoding version
   h.u64(static_cast<std::uint64_t>(frame));
   const RenderSettings& r = s.render;
   h.u64(r.width);
@@ -56,6 +98,7 @@ std::string sceneFingerprint(const Scene& s, int frame) {
   h.u64(static_cast<std::uint64_t>(r.transmissiveShadows));
   h.u64(static_cast<std::uint64_t>(r.bvh));
   h.u64(static_cast<std::uint64_t>(r.precision));
+  h.u64(static_cast<std::uint64_t>(r.textureFilter));
   h.vec(s.camera.position);
   h.vec(s.camera.lookAt);
   h.vec(s.camera.up);
@@ -72,6 +115,16 @@ std::string sceneFingerprint(const Scene& s, int frame) {
       h.vec(m.checker->color2);
       h.f64(m.checker->scale);
     }
+    h.u64(m.baseColorTexture ? 1 : 0);
+    if (const auto& t = m.baseColorTexture) {
+      h.u64(t->texture);
+      h.u64(t->texCoord);
+      h.vec(t->transform.offset);
+      h.f64(t->transform.rotation);
+      h.vec(t->transform.scale);
+    }
+    h.f64(m.alphaCutoff);
+    h.f64(m.alpha);
   }
   h.u64(s.lights.size());
   for (const PointLight& l : s.lights) {
@@ -105,7 +158,20 @@ std::string sceneFingerprint(const Scene& s, int frame) {
     if (t.normals) {
       for (const auto& n : *t.normals) h.vec(n);
     }
+    h.u64(t.uvs ? 1 : 0);
+    if (t.uvs) {
+      for (const auto& uv : *t.uvs) h.vec(uv);
+    }
+    h.u64(t.colors ? 1 : 0);
+    if (t.colors) {
+      for (const auto& c : *t.colors) h.vec(c);
+    }
     h.u64(t.material);
+  }
+  h.u64(s.textures.size());
+  for (const auto& t : s.textures) {
+    h.u64(t ? 1 : 0);
+    if (t) hashTexture(h, *t);
   }
   char text[17];
   std::snprintf(text, sizeof text, "%016llx", static_cast<unsigned long long>(h.value()));
