@@ -12,6 +12,7 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <sstream>
 #include <vector>
 
@@ -122,6 +123,22 @@ TEST(ViewSettings, KnobsCompareEverythingButTheImageSize) {
   b = a;
   b.bailout = 0.5;
   EXPECT_FALSE(sameKnobs(a, b));
+  // Every other field of RenderSettings, one at a time.
+  const std::vector<std::pair<const char*, std::function<void(RenderSettings&)>>> changes = {
+      {"spp", [](RenderSettings& s) { s.spp = 4; }},
+      {"antialiasing", [](RenderSettings& s) { s.antialiasing = Antialiasing::Adaptive; }},
+      {"adaptive threshold", [](RenderSettings& s) { s.adaptiveThreshold = 0.25; }},
+      {"fresnel", [](RenderSettings& s) { s.fresnel = FresnelMode::Schlick; }},
+      {"transmissive shadows", [](RenderSettings& s) { s.transmissiveShadows = TransmissiveShadows::Opaque; }},
+      {"bvh", [](RenderSettings& s) { s.bvh = BvhMode::Off; }},
+      {"precision", [](RenderSettings& s) { s.precision = Precision::Float64; }},
+      {"texture filter", [](RenderSettings& s) { s.textureFilter = TextureFilter::Nearest; }},
+  };
+  for (const auto& [what, change] : changes) {
+    b = a;
+    change(b);
+    EXPECT_FALSE(sameKnobs(a, b)) << what;
+  }
 }
 
 class SceneWatcherTest : public ::testing::Test {

@@ -21,7 +21,8 @@ Scene withEffects(const Scene& scene, const EffectToggles& effects) {
 bool sameKnobs(const RenderSettings& a, const RenderSettings& b) {
   return a.maxDepth == b.maxDepth && a.spp == b.spp && a.bailout == b.bailout && a.antialiasing == b.antialiasing &&
          a.adaptiveThreshold == b.adaptiveThreshold && a.numerics == b.numerics && a.fresnel == b.fresnel &&
-         a.transmissiveShadows == b.transmissiveShadows && a.bvh == b.bvh;
+         a.transmissiveShadows == b.transmissiveShadows && a.bvh == b.bvh && a.precision == b.precision &&
+         a.textureFilter == b.textureFilter;
 }
 
 Accumulation::Step Accumulation::next(std::uint32_t samplesPerFrame, std::uint32_t maxSamples) {
