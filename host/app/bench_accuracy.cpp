@@ -164,8 +164,8 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     std::fprintf(stderr, "%s: %ux%u\n", name.c_str(), scene.render.width, scene.render.height);
 
     Renderer renderer(context, nullptr);
-    renderer.setScene(scene);
-    Features features = analyzeScene(scene, scene.render);
+    const Features features = analyzeScene(scene, scene.render);
+    renderer.setScene(scene, features);
     RenderOptions options;
     options.countStats = false;
 
@@ -224,9 +224,10 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
       std::fprintf(stderr, "  %-10s %-22s %9.2f ms  rmse %.5f  off %.4f  (1 spp: rmse %.5f off %.4f)\n", p.knob.c_str(),
                    p.value.c_str(), t.medianMs, e.rmse, e.fractionOff, e1.rmse, e1.fractionOff);
       // Heat maps of where the error is, for the points the report discusses.
-      bool telling = (p.knob == "numerics" && p.value == "naive") ||
+      bool telling = (p.knob == "numerics" && p.value == enumName(Numerics::Naive)) ||
                      (p.knob == "depth" && (p.value == "1" || p.value == "2")) || (p.knob == "spp" && p.value == "1") ||
-                     (p.knob == "bailout" && p.value == "1/16") || (p.knob == "fresnel" && p.value == "schlick") ||
+                     (p.knob == "bailout" && p.value == "1/16") ||
+                     (p.knob == "fresnel" && p.value == enumName(FresnelMode::Schlick)) ||
                      (p.knob == "adaptive" && p.value == "16");
       if (telling && !args.quick) {
         Image map = errorMap(t.image, oneSample ? reference1 : reference.image);

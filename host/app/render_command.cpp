@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 
 #include "app/commands.h"
 #include "app/terminal.h"
@@ -254,11 +255,14 @@ int runRender(const RenderArgs& args) {
     checkOutputPath(outputs.back());
   }
 
-  Features features = analyzeScene(scene, scene.render);
+  // A static scene is analysed once, here. An animated one is analysed per frame below (what moves
+  // changes which planes can occlude), so its base scene only for --explain.
+  std::optional<Features> features;
+  if (!scene.animation || args.explain) features = analyzeScene(scene, scene.render);
   if (args.explain) {
     std::printf("%s, %ux%u, max_depth %d, %d spp:\n", args.scene.string().c_str(), scene.render.width,
                 scene.render.height, scene.render.maxDepth, scene.render.spp);
-    for (const auto& line : features.explain()) std::printf("  %s\n", line.c_str());
+    for (const auto& line : features->explain()) std::printf("  %s\n", line.c_str());
     std::fflush(stdout);
   }
 
@@ -289,7 +293,7 @@ int runRender(const RenderArgs& args) {
   for (int f = frames.first; f <= frames.last; ++f) {
     const Scene frameScene = scene.animation ? sceneAtFrame(scene, *scene.animation, f) : scene;
     // A static scene's features are the ones analysed above; an animated frame's are its own.
-    renderer.setScene(frameScene, scene.animation ? analyzeScene(frameScene, frameScene.render) : features);
+    renderer.setScene(frameScene, scene.animation ? analyzeScene(frameScene, frameScene.render) : *features);
     ProgressBar bar(!args.quiet);
     options.progress = [&](const RenderProgress& p) { bar.update(p); };
     RenderResult result = renderer.render(frameScene.camera, frameScene.render, options);
@@ -365,9 +369,7 @@ int runInfo(const DeviceFlags& flags) {
     }
   }
   if (!flags.device.empty()) {
-    vulkan::ContextOptions options;
-    options.device = flags.device;
-    vulkan::Context context = openContext(options);
+    vulkan::Context context = openContext(contextOptions(flags));
     std::printf("selected: %s\n", context.info().name.c_str());
   }
   return 0;
