@@ -349,6 +349,7 @@ public:
 
   MeshData read() {
     for (std::size_t i = 0; i < model_.materials.size(); ++i) data_.materials.push_back(mapMaterial(i));
+    if (std::string unread = unreadMaterialInputs(); !unread.empty()) data_.warnings.push_back(unread);
 
     // The default scene, else the first; a file without scenes shows every root node.
     std::vector<int> roots;
@@ -739,6 +740,34 @@ private:
       m.baseColorTexture = materialTexture(pbr.baseColorTexture, where);
     }
     return m;
+  }
+
+  // What the file's materials ask for that vkray does not render, in one line, so that a label drawn
+  // by an emissive texture over a black base (glTF2/ClearCoat-glTF) does not go black unannounced.
+  // Empty when every material input is read.
+  std::string unreadMaterialInputs() const {
+    std::vector<std::pair<std::string, int>> counts = {{"emission", 0},
+                                                       {"emissive texture", 0},
+                                                       {"normal texture", 0},
+                                                       {"occlusion texture", 0},
+                                                       {"metallic-roughness texture", 0}};
+    for (const tinygltf::Material& g : model_.materials) {
+      bool emits = false;
+      for (double e : g.emissiveFactor) emits = emits || (std::isfinite(e) && e > 0.0);
+      counts[0].second += emits && g.emissiveTexture.index < 0 ? 1 : 0;
+      counts[1].second += g.emissiveTexture.index >= 0 ? 1 : 0;
+      counts[2].second += g.normalTexture.index >= 0 ? 1 : 0;
+      counts[3].second += g.occlusionTexture.index >= 0 ? 1 : 0;
+      counts[4].second += g.pbrMetallicRoughness.metallicRoughnessTexture.index >= 0 ? 1 : 0;
+    }
+    std::string list;
+    for (const auto& [what, n] : counts) {
+      if (n == 0) continue;
+      list += (list.empty() ? "" : ", ") + what + " (" + std::to_string(n) + (n == 1 ? " material)" : " materials)");
+    }
+    if (list.empty()) return {};
+    return "not rendered: " + list + "; vkray reads base colour, its texture, transmission and alpha " +
+           "(docs/meshes.md)";
   }
 
   // texture -> image (decoded once per image) and sampler; KHR_texture_transform.
