@@ -38,8 +38,11 @@ void main() {
   if (op == kProbeSphere) {
     // op.z == 1: the kernel's call for its unit directions, with the constant a = 1.
     float a = q.op.z == 1u ? 1.0 : dot(ray.dir, ray.dir);
-    t = robust ? intersectSphereRobust(ray, a, q.a.xyz, q.a.w, tMax) : intersectSphereNaive(ray, q.a.xyz, q.a.w, tMax);
-    if (t > 0.0) sphereSurface(ray, t, q.a.xyz, q.a.w, p, n, err);
+    // b.xyz: the centre's low part (zero unless a test sets it).
+    t = robust ? intersectSphereRobust(ray, a, q.a.xyz, q.b.xyz, q.a.w, tMax)
+               : intersectSphereNaive(ray, q.a.xyz, q.a.w, tMax);
+    if (t > 0.0 && robust) sphereSurface(ray, t, q.a.xyz, q.b.xyz, q.a.w, p, n, err);
+    if (t > 0.0 && !robust) sphereSurfaceReprojected(ray, t, q.a.xyz, q.a.w, p, n, err);
   } else if (op == kProbePlane) {
     t = robust ? intersectPlaneRobust(ray, q.a.xyz, q.a.w, tMax) : intersectPlaneNaive(ray, q.a.xyz, q.a.w, tMax);
     if (t > 0.0) {

@@ -317,6 +317,15 @@ void sphereSelfHits(Tally& tally, Numerics mode, Rng& rng, const std::vector<Sph
     if (mode == Numerics::Robust) {
       double gap = glm::length(dvec3(o) - dvec3(s.c)) - s.r;
       tally.check(gap > 0.0, [&] { return "spawned origin " + str(gap) + " below radius " + str(s.r); });
+      // The offset scales with the hit point, not with the sphere: the bound gamma(8)(|p| + |g|) of
+      // sphereSurface plus a one-ulp step, and the compensated sum's residual gamma(4)^2 (r + |c|).
+      // 0.4 units for a ground of radius 1e6 before; 1e-5 now.
+      double pMax = maxAbs(dvec3(hits[i].point));
+      double allowed = 32.0 * kU * pMax + 256.0 * kU * kU * (s.r + maxAbs(dvec3(s.c)));
+      tally.noteRatio(gap / allowed);
+      tally.check(gap <= allowed, [&] {
+        return "spawned origin " + str(gap) + " above radius " + str(s.r) + " (allowed " + str(allowed) + ")";
+      });
     }
     for (int k = 0; k < perHit; ++k) {
       dvec3 w;
@@ -341,10 +350,11 @@ void sphereSelfHits(Tally& tally, Numerics mode, Rng& rng, const std::vector<Sph
   }
 }
 
-Tally groundSphere(Numerics mode) {
-  Tally tally{"radius-1e4 ground sphere"};
+Tally groundSphere(Numerics mode, double radius) {
+  Tally tally{"ground sphere"};
   Rng rng(401);
-  const SphereShape ground{vec3(0.0f, -1e4f, 0.0f), 1e4f};
+  const SphereShape ground{vec3(0.0f, static_cast<float>(-radius), 0.0f), static_cast<float>(radius)};
+  const double r = ground.r, cy = ground.c.y; // the float sphere, exactly
   std::vector<SphereHitRay> rays;
   for (double height : {0.1, 0.3, 1.0, 3.0, 10.0}) {
     for (int i = 0; i < 300 * sweepScale(); ++i) {
@@ -353,7 +363,8 @@ Tally groundSphere(Numerics mode) {
              static_cast<float>(rng.uniform(-1, 1)));
       double rho = rng.decades(-1.0, 2.0), phi = rng.uniform(0.0, 6.283185307179586);
       double x = o.x + rho * std::cos(phi), z = o.z + rho * std::sin(phi);
-      double y = -1e4 + std::sqrt(1e8 - x * x - z * z);
+      double h2 = x * x + z * z;
+      double y = cy + r - h2 / (r + std::sqrt(r * r - h2)); // no cancellation at any radius
       rays.push_back({ground, o, unitFloat(dvec3(x, y, z) - dvec3(o))});
     }
   }
@@ -362,7 +373,113 @@ Tally groundSphere(Numerics mode) {
 }
 
 TEST(NumericsSphere, HugeGroundSphereHasNoAcne) {
-  runBoth("4 radius-1e4 ground seen from 0.1..10", groundSphere, true);
+  runBoth(
+      "4 radius-1e4 ground seen from 0.1..10", [](Numerics m) { return groundSphere(m, 1e4); }, true);
+}
+
+// A ground of radius 1e5..1e7 (the ray-tracing books' trick in place of a plane): before the
+// compensated distance (sphereSurface), hit points re-projected through a centre 1e6 away carried
+// errors of ~0.1 and offsets of ~0.4, which moved shadows and reflections visibly.
+TEST(NumericsSphere, GroundSpheresOfRadius1e5To1e7) {
+  runBoth(
+      "4b radius 1e5, 1e6, 1e7 grounds from 0.1..10",
+      [](Numerics m) {
+        Tally all{"ground spheres 1e5..1e7"};
+        for (double radius : {1e5, 1e6, 1e7}) {
+          Tally one = groundSphere(m, radius);
+          all.cases += one.cases;
+          all.failures += one.failures;
+          all.noteRatio(one.worstRatio);
+          for (auto& e : one.examples)
+            if (all.examples.size() < 3) all.examples.push_back(e);
+        }
+        return all;
+      },
+      true);
+}
+
+// Beads: spheres of radius 1e-4 seen from 1e-3 .. 1e2 away, at up to 1e3 from the origin.
+Tally beads(Numerics mode) {
+  Tally tally{"beads"};
+  Rng rng(402);
+  std::vector<SphereHitRay> rays;
+  for (int i = 0; i < 1200 * sweepScale(); ++i) {
+    SphereShape s{toFloat(rng.spreadPoint(-3.0, 3.0)), 1e-4f};
+    dvec3 n = rng.unitVector();
+    dvec3 target = dvec3(s.c) + 0.9 * static_cast<double>(s.r) * n; // inside the silhouette
+    vec3 o = toFloat(target + (n + 0.5 * rng.unitVector()) * rng.decades(-3.0, 2.0));
+    rays.push_back({s, o, unitFloat(target - dvec3(o))});
+  }
+  sphereSelfHits(tally, mode, rng, rays, 16);
+  return tally;
+}
+
+TEST(NumericsSphere, BeadsOfRadiusTenToTheMinusFour) {
+  runBoth("4c radius-1e-4 beads, 1e-3..1e2 away", beads, false);
+}
+
+// A sky dome: the camera inside a sphere of radius 1e3..1e7 whose centre is off the camera by up
+// to half the radius. From the inside hit, the spawned origin must lie inside, within the bound
+// of its hit point, and a ray sent back into the dome must meet it again at the far side (the
+// chord), never at the point it leaves.
+Tally skyDome(Numerics mode) {
+  Tally tally{"sky dome"};
+  Rng rng(403);
+  struct Ray {
+    SphereShape s;
+    vec3 o, d;
+  };
+  std::vector<Ray> rays;
+  std::vector<gpu::ProbeQuery> first;
+  for (double radius : {1e3, 1e5, 1e7}) {
+    for (int i = 0; i < 300 * sweepScale(); ++i) {
+      SphereShape s{toFloat(rng.unitVector() * radius * rng.uniform(0.0, 0.5)), static_cast<float>(radius)};
+      vec3 o = toFloat(rng.unitVector() * rng.decades(-1.0, 1.0));
+      vec3 d = unitFloat(rng.unitVector());
+      rays.push_back({s, o, d});
+      first.push_back(sphereQuery(o, d, s.c, s.r, mode));
+    }
+  }
+  auto hits = runProbe(first);
+  std::vector<gpu::ProbeQuery> second;
+  std::vector<std::pair<std::size_t, double>> chords;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Ray& ray = rays[i];
+    tally.check(hit(hits[i]), [&] { return "missed the dome of radius " + str(ray.s.r) + " from inside"; });
+    if (!hit(hits[i])) continue;
+    dvec3 c(ray.s.c);
+    dvec3 n = glm::normalize(dvec3(hits[i].point) - c);
+    vec3 o = spawnOut(hits[i]); // back to the side the eye ray came from: the inside
+    double gap = ray.s.r - glm::length(dvec3(o) - c);
+    if (mode == Numerics::Robust) {
+      double allowed = 32.0 * kU * maxAbs(dvec3(hits[i].point)) + 256.0 * kU * kU * (ray.s.r + maxAbs(c));
+      tally.check(gap > 0.0 && gap <= allowed, [&] {
+        return "spawned origin " + str(gap) + " inside radius " + str(ray.s.r) + " (allowed " + str(allowed) + ")";
+      });
+    }
+    // Back into the dome, 30..80 degrees off the inward normal: the chord is 2 r cos(angle).
+    dvec3 in = -n;
+    dvec3 w = glm::normalize(in + std::tan(rng.uniform(0.52, 1.4)) * perpendicular(in));
+    vec3 d = unitFloat(w);
+    dvec3 f = dvec3(o) - c;
+    double b = glm::dot(f, dvec3(d));
+    double chord = -b + std::sqrt(b * b - (glm::dot(f, f) - static_cast<double>(ray.s.r) * ray.s.r));
+    chords.push_back({i, chord});
+    second.push_back(sphereQuery(o, d, ray.s.c, ray.s.r, mode));
+  }
+  auto again = runProbe(second);
+  for (std::size_t k = 0; k < chords.size(); ++k) {
+    double t = again[k].hit.x, chord = chords[k].second;
+    tally.check(std::abs(t - chord) <= 1e-3 * chord, [&] {
+      return "back into the dome of radius " + str(rays[chords[k].first].s.r) + ": t " + str(t) + ", chord " +
+             str(chord);
+    });
+  }
+  return tally;
+}
+
+TEST(NumericsSphere, SkyDomesSeenFromInside) {
+  runBoth("4d sky domes 1e3..1e7, camera inside", skyDome, false);
 }
 
 Tally reintersectSpheres(Numerics mode) {

@@ -125,10 +125,10 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
 int runBenchAccuracy(const BenchAccuracyArgs& args) {
   std::vector<std::filesystem::path> scenes = args.scenes;
   if (scenes.empty()) {
-    // The three looks, then two hard cases where naive numerics go wrong (docs/numerics.md), then
+    // The three looks, then three hard cases where naive numerics go wrong (docs/numerics.md), then
     // textures (the texture_filter points).
     for (const char* name : {"showcase.json", "glass.json", "seed.json", "numerics-cracks.json",
-                             "numerics-far-sphere.json", "textured.json"}) {
+                             "numerics-far-sphere.json", "numerics-huge-ground.json", "textured.json"}) {
       scenes.push_back(std::filesystem::path(VKRAY_SCENES_DIR) / name);
       if (args.quick) break;
     }

@@ -192,8 +192,14 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
         gpu::Light{glm::vec4(rel(l.position, origin), l.shadows ? 1.0f : 0.0f), glm::vec4(glm::vec3(l.color), 0.0f)});
   }
   for (const Sphere& s : scene.spheres) {
+    // The centre as float plus its rounding error, so robust numerics see it to ~2^-48 (gpu_types.h).
+    glm::dvec3 center = s.center - origin;
+    glm::vec3 high(center);
+    glm::vec3 low(center - glm::dvec3(high));
     g.spheres.push_back(
-        gpu::Sphere{glm::vec4(rel(s.center, origin), static_cast<float>(s.radius)), glm::uvec4(s.material, 0, 0, 0)});
+        gpu::Sphere{glm::vec4(high, static_cast<float>(s.radius)),
+                    glm::uvec4(s.material, std::bit_cast<std::uint32_t>(low.x), std::bit_cast<std::uint32_t>(low.y),
+                               std::bit_cast<std::uint32_t>(low.z))});
   }
   // Planes that can cast shadows go first: shadow rays test only those (features.h).
   std::vector<bool> occluding = planesThatCanOcclude(scene);

@@ -8,21 +8,92 @@
 #include "common.glsl"
 #include "offset.glsl"
 
+// ---- Error-free transformations ------------------------------------------------------------------
+
+const float kUnitRoundoff = 5.9604645e-8; // u = 2^-24: one rounding's relative error in float32
+
+// a + b and a * b as unevaluated pairs hi + lo, exactly (Knuth's TwoSum; Dekker's TwoProduct with
+// Veltkamp's split into 12-bit halves, so no fused multiply-add is needed: Vulkan guarantees correct
+// rounding for add, subtract and multiply, but only that of a multiply and an add for fma). `precise`
+// forbids the reassociation and contraction that would turn each lo into zero. Ogita, Rump & Oishi,
+// "Accurate Sum and Dot Product" (SIAM J. Sci. Comput. 26(6), 2005).
+vec2 twoSum(float a, float b) {
+  precise float s = a + b;
+  precise float bv = s - a;
+  precise float av = s - bv;
+  precise float e = (a - av) + (b - bv);
+  return vec2(s, e);
+}
+
+vec2 splitFloat(float a) {
+  precise float c = 4097.0 * a; // 2^12 + 1
+  precise float hi = c - (c - a);
+  precise float lo = a - hi;
+  return vec2(hi, lo);
+}
+
+vec2 twoSquare(float a) {
+  vec2 h = splitFloat(a);
+  precise float p = a * a;
+  precise float e = ((h.x * h.x - p) + 2.0 * h.x * h.y) + h.y * h.y;
+  return vec2(p, e);
+}
+
+// |hi + lo|^2 - r^2 for a vector given as hi + lo (|lo| <= ulp(hi)/2), as if computed in twice the
+// working precision (Ogita-Rump-Oishi's Sum2 over the exact squares): the absolute error is at most
+// u |result| + gamma(4)^2 (|hi|^2 + r^2), where the textbook dot(v, v) - r * r has error
+// ~3u (|v|^2 + r^2). Used where the two nearly cancel: a point close to the surface of a sphere that is
+// large against its distance from the point's origin (a ground sphere of radius 1e6 under the camera).
+float sumOfSquaresMinus(vec3 hi, vec3 lo, float r) {
+  vec2 x = twoSquare(hi.x), y = twoSquare(hi.y), z = twoSquare(hi.z), rr = twoSquare(r);
+  vec2 s1 = twoSum(x.x, y.x);
+  vec2 s2 = twoSum(s1.x, z.x);
+  vec2 s3 = twoSum(s2.x, -rr.x);
+  precise float err = ((s1.y + s2.y) + s3.y) + ((x.y + y.y) + (z.y - rr.y)) + 2.0 * dot(hi, lo);
+  return s3.x + err;
+}
+
+// a - (b + bLow) as hi + lo per component: a - b exactly, then bLow (|bLow| <= ulp(b)/2) taken from
+// the low part, which rounds at ~u^2 |a - b|, and the pair renormalised.
+void exactDifference(vec3 a, vec3 b, vec3 bLow, out vec3 hi, out vec3 lo) {
+  vec2 x = twoSum(a.x, -b.x), y = twoSum(a.y, -b.y), z = twoSum(a.z, -b.z);
+  x = twoSum(x.x, x.y - bLow.x);
+  y = twoSum(y.x, y.y - bLow.y);
+  z = twoSum(z.x, z.y - bLow.z);
+  hi = vec3(x.x, y.x, z.x);
+  lo = vec3(x.y, y.y, z.y);
+}
+
 // ---- Spheres -------------------------------------------------------------------------------------
 
 // Ray Tracing Gems ch. 7 (Haines, Gunther & Akenine-Moller, "Precision Improvements for Ray/Sphere
 // Intersection"): the discriminant from the distance of the centre to the ray line,
 // r^2 - |f - (f.d/a) d|^2, which keeps its precision for small spheres far away; and the root pair
 // c/q, q/a from q = b' + sgn(b') sqrt(a disc), which avoids cancellation in the smaller root.
-// Returns the nearest root in (0, tMax), or -1. `a` is dot(dir, dir); the kernel passes the
-// constant 1 for its unit directions, which folds the divisions by a away.
-float intersectSphereRobust(Ray ray, float a, vec3 center, float radius, float tMax) {
-  vec3 f = ray.origin - center;
+// c = |f|^2 - r^2 says on which side of the surface the origin lies, and the near root c/q carries
+// its relative error. It cancels when the origin is close to the surface against the radius (a ray
+// leaving a sphere; every eye ray above a ground sphere, where 6 units above a radius of 10^6 leave
+// c five good bits and t an error of 3 %). When more than 8 bits cancel (the origin within ~r/256
+// of the surface), c is recomputed with f = o - centre exact and the squares compensated
+// (sumOfSquaresMinus): the side is right even 10^-12 radii above the surface and t is good to a few
+// ulps; otherwise the fast c costs t at most 2u * 2^8 = 3e-5 of itself. Chosen by the numbers: rays
+// far from every sphere's surface run the test they ran before. Returns the nearest root in
+// (0, tMax), or -1. `a` is
+// dot(dir, dir); the kernel passes the constant 1 for its unit directions. The centre is
+// center + centerLow (gpu_types.h, sphereCenterLow).
+float intersectSphereRobust(Ray ray, float a, vec3 center, vec3 centerLow, float radius, float tMax) {
+  vec3 f = (ray.origin - center) - centerLow;
   float bPrime = -dot(f, ray.dir);  // b' = -f.d (half of -b)
   vec3 l = f + (bPrime / a) * ray.dir; // f minus its projection on d: centre-to-line vector
   float r2 = radius * radius;
   float discA = r2 - dot(l, l);        // = disc / a
-  float c = dot(f, f) - r2;
+  float ff = dot(f, f);
+  float c = ff - r2;
+  if (abs(c) < 0.00390625 * (ff + r2)) { // 2^-8
+    vec3 fh, fl;
+    exactDifference(ray.origin, center, centerLow, fh, fl);
+    c = sumOfSquaresMinus(fh, fl, radius);
+  }
   float q = bPrime + signNonZero(bPrime) * sqrt(a * max(discA, 0.0));
   float t0 = c / q;
   float t1 = q / a;
@@ -51,10 +122,30 @@ float intersectSphereNaive(Ray ray, vec3 center, float radius, float tMax) {
   return -1.0;
 }
 
-// Hit point re-projected onto the sphere (RTG ch. 7), outward unit normal, and an error bound: the
-// re-projected point is a few roundings of values of size |centre| + r (pbrt-v4 sphere bound).
-void sphereSurface(Ray ray, float t, vec3 center, float radius, out vec3 p, out vec3 n,
+// Robust hit point (docs/numerics.md, "Spheres of any radius"): p0 = o + t d, then moved onto the
+// sphere along the normal by its distance g = |p0 - c| - r, computed with p0 - c exact and the
+// squares compensated: g = (|e|^2 - r^2) / (|e| + r). The point's error is then a few roundings of
+// |p0| and |g| (plus the compensated sum's gamma(4)^2 residual at the sphere's scale), not of
+// |c| + r as for the re-projection c + r n: 10^-5 instead of 0.4 for the ground of radius 10^6 under
+// the camera, the same for a bead far away. The bound also covers the side decision that the next
+// intersection test makes from c = |f|^2 - r^2 (same compensated sum).
+void sphereSurface(Ray ray, float t, vec3 center, vec3 centerLow, float radius, out vec3 p, out vec3 n,
                    out float errorBound) {
+  vec3 p0 = ray.origin + t * ray.dir;
+  vec3 eh, el;
+  exactDifference(p0, center, centerLow, eh, el);
+  float len = length(eh);
+  n = len > 0.0 ? eh / len : vec3(0.0, 0.0, 1.0);
+  float g = sumOfSquaresMinus(eh, el, radius) / (len + radius);
+  p = p0 - g * n;
+  float gamma4 = gammaBound(4);
+  errorBound = gammaBound(8) * (maxComponent(abs(p0)) + abs(g)) + 8.0 * gamma4 * gamma4 * (len + radius);
+}
+
+// The textbook surface (naive numerics): the hit point re-projected onto the sphere (RTG ch. 7),
+// c + r n, with an error bound of a few roundings of values of size |centre| + r (pbrt-v4).
+void sphereSurfaceReprojected(Ray ray, float t, vec3 center, float radius, out vec3 p, out vec3 n,
+                              out float errorBound) {
   vec3 hit = ray.origin + t * ray.dir;
   vec3 rel = hit - center;
   float len = length(rel);

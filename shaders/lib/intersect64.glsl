@@ -7,10 +7,10 @@
 #include "common.glsl"
 
 // RTG ch. 7 sphere test in double; returns the nearest root in (0, tMax) or -1.
-float intersectSphere64(Ray ray, vec3 center, float radius, float tMax) {
+float intersectSphere64(Ray ray, vec3 center, vec3 centerLow, float radius, float tMax) {
   dvec3 o = dvec3(ray.origin);
   dvec3 d = dvec3(ray.dir);
-  dvec3 f = o - dvec3(center);
+  dvec3 f = o - (dvec3(center) + dvec3(centerLow));
   double r = double(radius);
   double a = dot(d, d);
   double bPrime = -dot(f, d);
@@ -29,15 +29,18 @@ float intersectSphere64(Ray ray, vec3 center, float radius, float tMax) {
   return t > 0.0 ? max(float(t), 1.4e-45) : -1.0;
 }
 
-void sphereSurface64(Ray ray, float t, vec3 center, float radius, out vec3 p, out vec3 n, out float errorBound) {
+void sphereSurface64(Ray ray, float t, vec3 center, vec3 centerLow, float radius, out vec3 p, out vec3 n,
+                     out float errorBound) {
   dvec3 hit = dvec3(ray.origin) + double(t) * dvec3(ray.dir);
-  dvec3 rel = hit - dvec3(center);
+  dvec3 rel = hit - (dvec3(center) + dvec3(centerLow));
   double len = length(rel);
   dvec3 nd = len > 0.0 ? rel / len : dvec3(0.0, 0.0, 1.0);
-  p = vec3(dvec3(center) + double(radius) * nd);
+  // The hit moved onto the sphere along the normal (as the float build does): rounding to float then
+  // costs half an ulp of |p|, not of |centre| + r, and double's own error is ~2^-50 of the sphere's
+  // scale (the cancellation in |rel| - r).
+  p = vec3(hit - (len - double(radius)) * nd);
   n = vec3(nd);
-  // Rounding the double point to float: half an ulp per coordinate, well inside this bound.
-  errorBound = gammaBound(2) * (radius + maxComponent(abs(center)));
+  errorBound = gammaBound(2) * maxComponent(abs(p)) + 8.9e-16 * (radius + maxComponent(abs(center)));
 }
 
 float intersectPlane64(Ray ray, vec3 n, float offsetD, float tMax) {

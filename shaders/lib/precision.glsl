@@ -11,8 +11,8 @@
 #extension GL_ARB_gpu_shader_fp64 : enable
 #include "intersect64.glsl"
 
-float sphereDistance(TraceRay r, vec3 center, float radius, float tMax) {
-  return intersectSphere64(r.ray, center, radius, tMax);
+float sphereDistance(TraceRay r, vec3 center, vec3 centerLow, float radius, float tMax) {
+  return intersectSphere64(r.ray, center, centerLow, radius, tMax);
 }
 
 float triangleDistance(TraceRay r, vec3 v0, vec3 v1, vec3 v2, float tMax, out vec3 bary) {
@@ -32,8 +32,9 @@ float planeDistance(TraceRay r, vec3 normal, float offset, float tMax) {
   return intersectPlane64(r.ray, normal, offset, tMax);
 }
 
-void sphereHitPoint(Ray ray, float t, vec3 center, float radius, out vec3 p, out vec3 n, out float errorBound) {
-  sphereSurface64(ray, t, center, radius, p, n, errorBound);
+void sphereHitPoint(Ray ray, float t, vec3 center, vec3 centerLow, float radius, out vec3 p, out vec3 n,
+                    out float errorBound) {
+  sphereSurface64(ray, t, center, centerLow, radius, p, n, errorBound);
 }
 
 void triangleHitPoint(Ray ray, float t, vec3 bary, vec3 v0, vec3 v1, vec3 v2, out vec3 p, out vec3 ng,
@@ -43,8 +44,10 @@ void triangleHitPoint(Ray ray, float t, vec3 bary, vec3 v0, vec3 v1, vec3 v2, ou
 
 #else
 
-float sphereDistance(TraceRay r, vec3 center, float radius, float tMax) {
-  return ROBUST ? intersectSphereRobust(r.ray, 1.0, center, radius, tMax)
+// Naive numerics take the centre as the float it rounds to (the textbook sphere); robust ones add
+// its low part.
+float sphereDistance(TraceRay r, vec3 center, vec3 centerLow, float radius, float tMax) {
+  return ROBUST ? intersectSphereRobust(r.ray, 1.0, center, centerLow, radius, tMax)
                 : intersectSphereNaive(r.ray, center, radius, tMax);
 }
 
@@ -62,8 +65,14 @@ float planeDistance(TraceRay r, vec3 normal, float offset, float tMax) {
   return ROBUST ? intersectPlaneRobust(r.ray, normal, offset, tMax) : intersectPlaneNaive(r.ray, normal, offset, tMax);
 }
 
-void sphereHitPoint(Ray ray, float t, vec3 center, float radius, out vec3 p, out vec3 n, out float errorBound) {
-  sphereSurface(ray, t, center, radius, p, n, errorBound);
+// Robust: o + t d moved onto the sphere by its compensated distance; naive: the re-projection c + r n.
+void sphereHitPoint(Ray ray, float t, vec3 center, vec3 centerLow, float radius, out vec3 p, out vec3 n,
+                    out float errorBound) {
+  if (ROBUST) {
+    sphereSurface(ray, t, center, centerLow, radius, p, n, errorBound);
+  } else {
+    sphereSurfaceReprojected(ray, t, center, radius, p, n, errorBound);
+  }
 }
 
 // Robust: the point from the barycentrics (pbrt-v4); naive: the textbook origin + t * dir.

@@ -9,7 +9,7 @@
 
 float sphereT(TraceRay r, uint i, float tMax) {
   Sphere s = loadSphere(i);
-  return sphereDistance(r, sphereCenter(s), sphereRadius(s), tMax);
+  return sphereDistance(r, sphereCenter(s), sphereCenterLow(s), sphereRadius(s), tMax);
 }
 
 float triangleT(TraceRay r, uint i, float tMax, out vec3 bary) {
@@ -50,7 +50,7 @@ Surface surfaceAt(TraceRay r, Hit hit) {
   if (VERTEX_COLORS) s.vertexColor = vec3(1.0);
   if (hit.kind == kPrimSphere) {
     Sphere sph = loadSphere(hit.index);
-    sphereHitPoint(r.ray, hit.t, sphereCenter(sph), sphereRadius(sph), s.p, s.ng, s.errorBound);
+    sphereHitPoint(r.ray, hit.t, sphereCenter(sph), sphereCenterLow(sph), sphereRadius(sph), s.p, s.ng, s.errorBound);
     s.ns = s.ng;
     s.material = sphereMaterial(sph);
   } else if (hit.kind == kPrimTriangle) {

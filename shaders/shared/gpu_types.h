@@ -193,8 +193,8 @@ struct Light {
 };
 
 struct Sphere {
-  vec4 centerRadius; // xyz: centre (camera-relative); w: radius
-  uvec4 meta;        // x: material; yzw: unused
+  vec4 centerRadius; // xyz: centre (camera-relative), rounded to float; w: radius
+  uvec4 meta;        // x: material; yzw: the centre's low part (float bits): centre - xyz, from double
 };
 
 struct Plane {
@@ -262,6 +262,9 @@ bool castsShadows(Light l) { return l.position.w > 0.0; }
 vec3 lightColor(Light l) { return l.color.rgb; }
 
 vec3 sphereCenter(Sphere s) { return s.centerRadius.xyz; }
+// centre = sphereCenter + sphereCenterLow to ~2^-48 relative: a ground of radius 1e6 sits where the
+// scene put it, not half an ulp of 1e6 (0.03) above or below (docs/numerics.md).
+vec3 sphereCenterLow(Sphere s) { return uintBitsToFloat(s.meta.yzw); }
 float sphereRadius(Sphere s) { return s.centerRadius.w; }
 uint sphereMaterial(Sphere s) { return s.meta.x; }
 
@@ -362,7 +365,7 @@ VKRAY_CONST(uint, kProbeBindingQueries, 0u);
 VKRAY_CONST(uint, kProbeBindingResults, 1u);
 VKRAY_CONST(uint, kProbeBindingVertices, 2u);
 
-VKRAY_CONST(uint, kProbeSphere, 0u);     // a: centre, radius; op.z: 1 = a = 1 as the kernel (unit dir)
+VKRAY_CONST(uint, kProbeSphere, 0u);     // a: centre, radius; b: centre low part; op.z: 1 = a = 1 (unit dir)
 VKRAY_CONST(uint, kProbePlane, 1u);      // a: normal, D
 VKRAY_CONST(uint, kProbeTriangle, 2u);   // a, b, c: vertices
 VKRAY_CONST(uint, kProbePolygon, 3u);    // a: normal; op.z/op.w: first vertex, count in Vertices[]
