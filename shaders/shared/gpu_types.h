@@ -8,6 +8,7 @@
 #define VKRAY_GPU_TYPES_H
 
 #ifdef __cplusplus
+#include <bit>
 #include <cstdint>
 #include <glm/glm.hpp>
 namespace vkray::gpu {
@@ -343,6 +344,21 @@ uint entryStackHeight(TileEntryPoints e) { return e.stackTop.w; }
 // A pixel of Image[] and PrevImage[]: vec4(sum of its samples' linear RGB radiance, sample count).
 vec3 pixelRadianceSum(vec4 p) { return p.rgb; }
 float pixelSampleCount(vec4 p) { return p.w; }
+// clang-format on
+#endif
+
+#ifdef __cplusplus
+// The host's reads and writes of the words it moves or checks after packing, named as in the shaders.
+// clang-format off
+inline uint triangleMaterial(const Triangle& t) { return std::bit_cast<uint>(t.v0.w); }
+inline uint triangleNormalBase(const Triangle& t) { return std::bit_cast<uint>(t.v1.w); } // kNoNormals: flat
+inline uint triangleUvBasePlusOne(const Triangle& t) { return std::bit_cast<uint>(t.v2.w); } // 0: none
+inline void setTriangleMaterial(Triangle& t, uint material) { t.v0.w = std::bit_cast<float>(material); }
+inline void setTriangleNormalBase(Triangle& t, uint first) { t.v1.w = std::bit_cast<float>(first); }
+inline void setTriangleUvBasePlusOne(Triangle& t, uint firstPlusOne) { t.v2.w = std::bit_cast<float>(firstPlusOne); }
+inline uint polygonFirstVertex(const Polygon& q) { return q.meta.x; }
+inline uint polygonVertexCount(const Polygon& q) { return q.meta.y; }
+inline bool hasVertexColors(const UvInfo& i) { return i.lodAndFlags.z != 0.0f; }
 // clang-format on
 #endif
 
