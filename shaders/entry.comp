@@ -109,29 +109,23 @@ void main() {
       uint ref = pending[--top];
       bool expanded = false;
       if (ref < kBvhLeafFlag) {
-        int base = int(4u * ref);
-        uvec4 a = imageLoad(nodeTexels, base);
-        uvec4 b = imageLoad(nodeTexels, base + 1);
-        uvec4 c = imageLoad(nodeTexels, base + 2);
-        uvec4 d = imageLoad(nodeTexels, base + 3);
-        vec3 min0 = uintBitsToFloat(a.xyz), max0 = uintBitsToFloat(b.xyz);
-        vec3 min1 = uintBitsToFloat(c.xyz), max1 = uintBitsToFloat(d.xyz);
-        bool in0 = boxInFrustum(min0, max0);
-        bool in1 = boxInFrustum(min1, max1);
+        BvhWideNode node = loadBvhNode(ref);
+        bool in0 = boxInFrustum(node.min0, node.max0);
+        bool in1 = boxInFrustum(node.min1, node.max1);
         int children = int(in0) + int(in1);
         // A leaf is never an entry point: the ray would test its primitives without testing its
         // box, which only the record above holds. A record with a leaf child stays whole.
-        bool leafChild = (in0 && a.w >= kBvhLeafFlag) || (in1 && b.w >= kBvhLeafFlag);
+        bool leafChild = (in0 && node.ref0 >= kBvhLeafFlag) || (in1 && node.ref1 >= kBvhLeafFlag);
         if (!leafChild && count + top + children <= int(kEntryPointsMax)) {
           expanded = true;
           if (in0 && in1) {
-            bool firstNearer = boxDistance2(min0, max0) <= boxDistance2(min1, max1);
-            pending[top++] = firstNearer ? b.w : a.w; // the farther waits below the nearer
-            pending[top++] = firstNearer ? a.w : b.w;
+            bool firstNearer = boxDistance2(node.min0, node.max0) <= boxDistance2(node.min1, node.max1);
+            pending[top++] = firstNearer ? node.ref1 : node.ref0; // the farther waits below the nearer
+            pending[top++] = firstNearer ? node.ref0 : node.ref1;
           } else if (in0) {
-            pending[top++] = a.w;
+            pending[top++] = node.ref0;
           } else if (in1) {
-            pending[top++] = b.w;
+            pending[top++] = node.ref1;
           }
         }
       }

@@ -58,7 +58,8 @@ void main() {
   ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
   if (any(greaterThanEqual(pixel, size))) return;
   vec4 s = imageLoad(sums, pixel.y * size.x + pixel.x); // row-major, as wide as the image written
-  vec3 rgb = s.rgb / max(s.w, 1.0); // a pixel not traced yet (w = 0) has a zero sum: black
+  // A pixel not traced yet (no samples) has a zero sum: black.
+  vec3 rgb = pixelRadianceSum(s) / max(pixelSampleCount(s), 1.0);
   rgb = ENCODE_SRGB ? linearToSrgb(rgb) : clamp(rgb, 0.0, 1.0);
 #ifdef VKRAY_RESOLVE_DIRECT
   // ImGui blends in the swapchain's UNORM values, which hold sRGB-encoded colour: so does this.

@@ -192,7 +192,7 @@ vec3 sampleSum(uvec2 pixel, uint pixelIndex, uint base, uint count, bool center)
   return sum;
 }
 
-vec3 averaged(vec4 v) { return v.w > 0.0 ? v.rgb / v.w : vec3(0.0); }
+vec3 averaged(vec4 p) { return pixelSampleCount(p) > 0.0 ? pixelRadianceSum(p) / pixelSampleCount(p) : vec3(0.0); }
 
 // Adaptive antialiasing (POV-Ray's +A): resample a pixel when its colour differs from a neighbour's
 // by more than the threshold in some channel (colours clamped to [0, 1], as they will be displayed).

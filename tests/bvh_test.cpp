@@ -5,7 +5,6 @@
 // every eye ray, and the same shadows.
 #include <algorithm>
 #include <cmath>
-#include <cstring>
 #include <random>
 #include <set>
 #include <vector>
@@ -491,13 +490,11 @@ TEST(BvhBuild, LeafOrderKeepsEveryTriangleWithItsNormals) {
   for (std::uint32_t i = 0; i < g.bvh.primRefs.size(); ++i) {
     EXPECT_EQ(g.bvh.primRefs[i], gpu::kPrimTriangle << gpu::kPrimKindShift | i);
     const gpu::Triangle& t = g.triangles[i];
-    std::uint32_t m;
-    std::memcpy(&m, &t.v0.w, sizeof m);
+    std::uint32_t m = gpu::triangleMaterial(t);
     materials.insert(m);
     const Tri& original = tris[m];
     EXPECT_EQ(vec3(t.v0), vec3(glm::dvec3(original.v0) - scene.camera.position));
-    std::uint32_t normalBase;
-    std::memcpy(&normalBase, &t.v1.w, sizeof normalBase);
+    std::uint32_t normalBase = gpu::triangleNormalBase(t);
     if (m % 3 == 0) {
       ASSERT_NE(normalBase, gpu::kNoNormals);
       EXPECT_EQ(g.normals[normalBase + 2].x, static_cast<float>(m)) << "triangle " << m;

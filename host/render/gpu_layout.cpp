@@ -19,6 +19,10 @@ static_assert(sizeof(BvhNode) == 32);
 static_assert(offsetof(BvhNode, offset) == 12 && offsetof(BvhNode, boundsMax) == 16 &&
               offsetof(BvhNode, countAxis) == 28);
 static_assert(sizeof(BvhWideNode) == 64 && offsetof(BvhWideNode, ref1) == 28 && offsetof(BvhWideNode, max1) == 48);
+// Records read as texels (16 bytes each).
+static_assert(sizeof(TextureRef) == kTextureRefTexels * 16 && sizeof(TextureLevel) == 16 && sizeof(UvInfo) == 16);
+static_assert(kUvRecordInfo == 3 && kUvRecordColors == kUvRecordTexels, "a uv record: 3 corners, UvInfo, colours");
+static_assert(sizeof(TileEntryPoints) == 32 && kEntryStackSlots == 6, "stack words 0..3, then 4, 5, start, height");
 static_assert(sizeof(FrameParams) == 11 * 16);
 static_assert(offsetof(FrameParams, bailout) == 112 && offsetof(FrameParams, adaptiveThreshold) == 116);
 static_assert(offsetof(FrameParams, imageSize) == 128 && offsetof(FrameParams, maxDepth) == 140);

@@ -1,6 +1,7 @@
 // Packing the scene into GPU arrays (see gpu_scene.h).
 #include "render/gpu_scene.h"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <chrono>
@@ -24,6 +25,21 @@ float down(double x) {
 float up(double x) {
   float f = static_cast<float>(x);
   return static_cast<double>(f) < x ? std::nextafter(f, INFINITY) : f;
+}
+
+// TextureRef's sampler word: wrap modes, magnification and the glTF minFilter (the levels a
+// minified sample reads, and nearest or bilinear texels in them), as texture.glsl reads it.
+std::uint32_t samplerWord(const Texture& tex) {
+  const TextureMinFilter mf = tex.minFilter;
+  const std::uint32_t minLevels =
+      mf == TextureMinFilter::NearestLevel || mf == TextureMinFilter::NearestLevelNearest ? gpu::kMinLevelsNearest
+      : mf == TextureMinFilter::Linear || mf == TextureMinFilter::Nearest                 ? gpu::kMinLevelsBase
+                                                                                          : gpu::kMinLevelsBlend;
+  const bool minNearest = mf == TextureMinFilter::NearestBetweenLevels || mf == TextureMinFilter::NearestLevelNearest ||
+                          mf == TextureMinFilter::Nearest;
+  return static_cast<std::uint32_t>(tex.wrapS) | static_cast<std::uint32_t>(tex.wrapT) << gpu::kSamplerWrapTShift |
+         (tex.nearest ? gpu::kSamplerMagNearest : 0u) | minLevels << gpu::kSamplerMinLevelsShift |
+         (minNearest ? gpu::kSamplerMinNearest : 0u);
 }
 
 } // namespace
@@ -51,8 +67,8 @@ std::vector<BvhPrimitive> bvhPrimitives(const Scene& scene, const GpuScene& g) {
   }
   for (std::size_t i = 0; i < g.polygons.size(); ++i) {
     Aabb b;
-    for (std::uint32_t k = 0; k < g.polygons[i].meta.y; ++k)
-      b.grow(glm::vec3(g.polyVertices[g.polygons[i].meta.x + k]));
+    for (std::uint32_t k = 0; k < gpu::polygonVertexCount(g.polygons[i]); ++k)
+      b.grow(glm::vec3(g.polyVertices[gpu::polygonFirstVertex(g.polygons[i]) + k]));
     prims.push_back({b, gpu::kPrimPolygon << gpu::kPrimKindShift | static_cast<std::uint32_t>(i)});
   }
   return prims;
@@ -76,17 +92,17 @@ void orderByLeaves(GpuScene& g) {
       spheres[slot] = g.spheres[index];
     } else if (kind == gpu::kPrimTriangle) {
       gpu::Triangle t = g.triangles[index];
-      std::uint32_t uvBase = std::bit_cast<std::uint32_t>(t.v2.w);
+      std::uint32_t uvBase = gpu::triangleUvBasePlusOne(t);
       if (uvBase != 0) {
-        t.v2.w = std::bit_cast<float>(static_cast<std::uint32_t>(texCoords.size()) + 1);
-        bool colors = g.texCoords[uvBase - 1 + 3].z != 0.0f;
+        gpu::setTriangleUvBasePlusOne(t, static_cast<std::uint32_t>(texCoords.size()) + 1);
+        bool colors = gpu::hasVertexColors(gpu::UvInfo{g.texCoords[uvBase - 1 + gpu::kUvRecordInfo]});
         std::uint32_t n = gpu::kUvRecordTexels + (colors ? gpu::kUvRecordColorTexels : 0);
         for (std::uint32_t k = 0; k < n; ++k) texCoords.push_back(g.texCoords[uvBase - 1 + k]);
       }
-      std::uint32_t normalBase = std::bit_cast<std::uint32_t>(t.v1.w);
+      std::uint32_t normalBase = gpu::triangleNormalBase(t);
       if (normalBase != gpu::kNoNormals) {
         // The shading normals move with their triangle, so a leaf's data stays together.
-        t.v1.w = std::bit_cast<float>(static_cast<std::uint32_t>(normals.size()));
+        gpu::setTriangleNormalBase(t, static_cast<std::uint32_t>(normals.size()));
         for (std::uint32_t k = 0; k < 3; ++k) normals.push_back(g.normals[normalBase + k]);
       }
       triangles[slot] = t;
@@ -124,24 +140,27 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
   g.origin = origin;
   g.background = scene.background;
   g.ambientLight = scene.ambientLight;
-  // Textures: each level's texels, then one reference per textured material (its texture's levels,
-  // wrap modes, uv set and transform), then the level records the references point at.
-  std::vector<std::uint32_t> firstLevel;
-  std::vector<glm::uvec4> levels;
+  // Textures: each level's texels; TextureInfo[] holds one TextureRef per textured material, then
+  // the TextureLevels the references point at.
+  const auto texturedMaterials = static_cast<std::uint32_t>(
+      std::ranges::count_if(scene.materials, [](const Material& m) { return m.baseColorTexture.has_value(); }));
+  const std::uint32_t levelBase = texturedMaterials * gpu::kTextureRefTexels; // the first TextureLevel
+  std::vector<std::uint32_t> firstLevel; // each texture's first TextureLevel in TextureInfo[]
+  std::vector<gpu::TextureLevel> levels;
   for (const auto& tex : scene.textures) {
-    firstLevel.push_back(static_cast<std::uint32_t>(levels.size()));
+    firstLevel.push_back(levelBase + static_cast<std::uint32_t>(levels.size()));
     for (const TextureLevel& l : tex->levels) {
-      levels.emplace_back(static_cast<std::uint32_t>(g.texels.size()), l.width, l.height, 0u);
+      levels.push_back(
+          gpu::TextureLevel{glm::uvec4(static_cast<std::uint32_t>(g.texels.size()), l.width, l.height, 0u)});
       g.texels.insert(g.texels.end(), l.texels.begin(), l.texels.end());
     }
   }
   std::vector<std::uint32_t> textureRef(scene.materials.size(), 0); // + 1; 0: untextured
-  std::vector<glm::uvec4> refs;
   for (std::size_t i = 0; i < scene.materials.size(); ++i) {
     const auto& bt = scene.materials[i].baseColorTexture;
     if (!bt) continue;
     const Texture& tex = *scene.textures[bt->texture];
-    textureRef[i] = static_cast<std::uint32_t>(refs.size() / gpu::kTextureRefTexels) + 1;
+    textureRef[i] = static_cast<std::uint32_t>(g.textureInfo.size() / gpu::kTextureRefTexels) + 1;
     const TextureTransform& x = bt->transform;
     double c = std::cos(x.rotation), s = std::sin(x.rotation);
     // uv' = T R S uv as rows (a b e; c d f), as texture.h's TextureTransform::apply.
@@ -150,27 +169,16 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     double det = std::abs(row0.x * row1.y - row0.y * row1.x);
     double texels = double(tex.levels[0].width) * tex.levels[0].height * std::max(det, 1e-30);
     auto bits = [](double v) { return std::bit_cast<std::uint32_t>(static_cast<float>(v)); };
-    // Sampler bits as texture.glsl reads them: wrap s (0-1), wrap t (2-3), nearest magnification (4),
-    // the minification's levels (5-6: 0 two blended, 1 the nearest one, 2 the image alone) and
-    // nearest texels when minified (7).
-    const TextureMinFilter mf = tex.minFilter;
-    const std::uint32_t minLevels = mf == TextureMinFilter::NearestLevel || mf == TextureMinFilter::NearestLevelNearest
-                                        ? 1u
-                                    : mf == TextureMinFilter::Linear || mf == TextureMinFilter::Nearest ? 2u
-                                                                                                        : 0u;
-    const bool minNearest = mf == TextureMinFilter::NearestBetweenLevels ||
-                            mf == TextureMinFilter::NearestLevelNearest || mf == TextureMinFilter::Nearest;
-    std::uint32_t wrap = static_cast<std::uint32_t>(tex.wrapS) | static_cast<std::uint32_t>(tex.wrapT) << 2 |
-                         (tex.nearest ? 16u : 0u) | minLevels << 5 | (minNearest ? 128u : 0u);
-    refs.emplace_back(firstLevel[bt->texture], static_cast<std::uint32_t>(tex.levels.size()), wrap, bt->texCoord);
-    refs.emplace_back(bits(row0.x), bits(row0.y), bits(row0.z), bits(0.5 * std::log2(texels)));
-    refs.emplace_back(bits(row1.x), bits(row1.y), bits(row1.z), 0u);
+    const double lodOffset = 0.5 * std::log2(texels);
+    gpu::TextureRef ref;
+    ref.levels = glm::uvec4(firstLevel[bt->texture], static_cast<std::uint32_t>(tex.levels.size()), samplerWord(tex),
+                            bt->texCoord);
+    ref.row0 = glm::uvec4(bits(row0.x), bits(row0.y), bits(row0.z), bits(lodOffset));
+    ref.row1 = glm::uvec4(bits(row1.x), bits(row1.y), bits(row1.z), 0u);
+    g.textureInfo.insert(g.textureInfo.end(), {ref.levels, ref.row0, ref.row1});
   }
-  if (!refs.empty()) {
-    auto levelBase = static_cast<std::uint32_t>(refs.size());
-    for (std::size_t r = 0; r < refs.size(); r += gpu::kTextureRefTexels) refs[r].x += levelBase;
-    g.textureInfo = std::move(refs);
-    g.textureInfo.insert(g.textureInfo.end(), levels.begin(), levels.end());
+  if (texturedMaterials > 0) {
+    for (const gpu::TextureLevel& level : levels) g.textureInfo.push_back(level.extent);
   } else {
     g.texels.clear();
   }
@@ -244,13 +252,18 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
       auto bias = [&](int a) {
         return textured ? static_cast<float>(0.5 * std::log2(std::max(uvArea(a), 1e-30) / world)) : 0.0f;
       };
-      g.texCoords.emplace_back(bias(0), bias(2), t.colors ? 1.0f : 0.0f, textured ? 1.0f : 0.0f);
+      gpu::UvInfo info;
+      info.lodAndFlags = glm::vec4(bias(0), bias(2), t.colors ? 1.0f : 0.0f, textured ? 1.0f : 0.0f);
+      g.texCoords.push_back(info.lodAndFlags);
       if (t.colors)
         for (const auto& c : *t.colors) g.texCoords.emplace_back(c);
     }
-    g.triangles.push_back(gpu::Triangle{glm::vec4(rel(t.v[0], origin), std::bit_cast<float>(t.material)),
-                                        glm::vec4(rel(t.v[1], origin), std::bit_cast<float>(normalBase)),
-                                        glm::vec4(rel(t.v[2], origin), std::bit_cast<float>(uvBase))});
+    gpu::Triangle gt{glm::vec4(rel(t.v[0], origin), 0.0f), glm::vec4(rel(t.v[1], origin), 0.0f),
+                     glm::vec4(rel(t.v[2], origin), 0.0f)};
+    gpu::setTriangleMaterial(gt, t.material);
+    gpu::setTriangleNormalBase(gt, normalBase);
+    gpu::setTriangleUvBasePlusOne(gt, uvBase);
+    g.triangles.push_back(gt);
   }
 
   const std::vector<BvhPrimitive> prims = bvhPrimitives(scene, g);

@@ -9,16 +9,14 @@
 
 // The invocation's tile's entry points (gpu_types.h), loaded by loadEntryPoints(); with them an eye
 // ray's walk starts from the subtrees its tile's frustum reaches instead of the root.
-uvec4 gEntryStack = uvec4(kBvhNoRef);
-uvec4 gEntryStart = uvec4(kBvhNoRef, kBvhNoRef, kBvhNoRef, 0u); // stack words 4, 5; start; height
+TileEntryPoints gEntryPoints = TileEntryPoints(uvec4(kBvhNoRef), uvec4(kBvhNoRef, kBvhNoRef, kBvhNoRef, 0u));
 
 // Call in main() with the invocation's pixel, when ENTRY_POINTS; `row0` is the band's first row.
 void loadEntryPoints(uvec2 pixel, uint row0) {
   if (!ENTRY_POINTS) return;
   uint tilesX = (frame.imageSize.x + kEntryTileSize - 1u) / kEntryTileSize;
   uint tile = ((pixel.y - row0) / kEntryTileSize) * tilesX + pixel.x / kEntryTileSize;
-  gEntryStack = texelFetch(entryTexels, int(2u * tile));
-  gEntryStart = texelFetch(entryTexels, int(2u * tile + 1u));
+  gEntryPoints = TileEntryPoints(texelFetch(entryTexels, int(2u * tile)), texelFetch(entryTexels, int(2u * tile + 1u)));
 }
 
 // A BVH leaf entry: the primitive's kind and index. In a scene whose bounded primitives are all
@@ -100,15 +98,15 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
   uint ref = opaqueUniform(frame.bvhRoot); // the root
   if (ENTRY_POINTS) {
     // Constant slots: plain vector stores, written whether or not this ray starts from them.
-    stack[0] = gEntryStack.x;
-    stack[1] = gEntryStack.y;
-    stack[2] = gEntryStack.z;
-    stack[3] = gEntryStack.w;
-    stack[4] = gEntryStart.x;
-    stack[5] = gEntryStart.y;
+    stack[0] = entryStackWord(gEntryPoints, 0u);
+    stack[1] = entryStackWord(gEntryPoints, 1u);
+    stack[2] = entryStackWord(gEntryPoints, 2u);
+    stack[3] = entryStackWord(gEntryPoints, 3u);
+    stack[4] = entryStackWord(gEntryPoints, 4u);
+    stack[5] = entryStackWord(gEntryPoints, 5u);
     if (fromEntryPoints) {
-      ref = gEntryStart.z;
-      sp = int(gEntryStart.w);
+      ref = entryStart(gEntryPoints);
+      sp = int(entryStackHeight(gEntryPoints));
     }
   }
   if (ref == kBvhNoRef) return; // an empty tree, or a tile whose frustum meets nothing
@@ -140,15 +138,11 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
     if (anyLane(ref < kBvhLeafFlag)) {
       while (true) {
         bool descending = ref < kBvhLeafFlag; // else the step changes nothing of this lane's
-        int base = int(4u * (descending ? ref : 0u));
-        uvec4 a = imageLoad(nodeTexels, base);
-        uvec4 b = imageLoad(nodeTexels, base + 1);
-        uvec4 c = imageLoad(nodeTexels, base + 2);
-        uvec4 d = imageLoad(nodeTexels, base + 3);
-        float enter0 = boxEntry(r, uintBitsToFloat(a.xyz), uintBitsToFloat(b.xyz), hit.t);
-        float enter1 = boxEntry(r, uintBitsToFloat(c.xyz), uintBitsToFloat(d.xyz), hit.t);
-        uint ref0 = a.w;
-        uint ref1 = b.w;
+        BvhWideNode node = loadBvhNode(descending ? ref : 0u);
+        float enter0 = boxEntry(r, node.min0, node.max0, hit.t);
+        float enter1 = boxEntry(r, node.min1, node.max1, hit.t);
+        uint ref0 = node.ref0;
+        uint ref1 = node.ref1;
         bool in0 = !isinf(enter0);
         bool in1 = !isinf(enter1);
         // Branch-free step. The farther child is written to the free slot on top of the stack by

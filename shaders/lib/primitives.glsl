@@ -68,17 +68,15 @@ Surface surfaceAt(TraceRay r, Hit hit) {
     uint uvBase = triangleUvBasePlusOne(tri);
     if ((TEXTURES || VERTEX_COLORS) && uvBase != 0u) {
       int b = int(uvBase - 1u);
-      vec4 flags = texelFetch(texCoordTexels, b + 3);
+      UvInfo info = loadUvInfo(b);
       if (TEXTURES) {
-        s.uv = hit.bary.x * texelFetch(texCoordTexels, b) + hit.bary.y * texelFetch(texCoordTexels, b + 1) +
-               hit.bary.z * texelFetch(texCoordTexels, b + 2);
-        s.uvLodBias = flags.xy;
-        s.hasUv = flags.w != 0.0;
+        s.uv = hit.bary.x * loadUvCorner(b, 0) + hit.bary.y * loadUvCorner(b, 1) + hit.bary.z * loadUvCorner(b, 2);
+        s.uvLodBias = triangleLodBias(info);
+        s.hasUv = hasTexCoords(info);
       }
-      if (VERTEX_COLORS && flags.z != 0.0) {
-        s.vertexColor = hit.bary.x * texelFetch(texCoordTexels, b + 4).rgb +
-                        hit.bary.y * texelFetch(texCoordTexels, b + 5).rgb +
-                        hit.bary.z * texelFetch(texCoordTexels, b + 6).rgb;
+      if (VERTEX_COLORS && hasVertexColors(info)) {
+        s.vertexColor = hit.bary.x * loadCornerColor(b, 0) + hit.bary.y * loadCornerColor(b, 1) +
+                        hit.bary.z * loadCornerColor(b, 2);
       }
     }
   } else if (hit.kind == kPrimPolygon) {

@@ -122,6 +122,27 @@ vec3 loadPolyVertex(uint i) {
   if (SCENE_IN_UBO) return small.polyVertices[i].xyz;
   return polyVertices[i].xyz;
 }
+BvhWideNode loadBvhNode(uint i) {
+  int n = int(4u * i);
+  uvec4 a = imageLoad(nodeTexels, n);
+  uvec4 b = imageLoad(nodeTexels, n + 1);
+  uvec4 c = imageLoad(nodeTexels, n + 2);
+  uvec4 d = imageLoad(nodeTexels, n + 3);
+  return BvhWideNode(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), b.w, uintBitsToFloat(c.xyz), c.w,
+                     uintBitsToFloat(d.xyz), d.w);
+}
+
+// Textures (TEXTURES, VERTEX_COLORS). `record` is a uv record's first texel in TexCoords[].
+UvInfo loadUvInfo(int record) { return UvInfo(texelFetch(texCoordTexels, record + int(kUvRecordInfo))); }
+vec4 loadUvCorner(int record, int k) { return texelFetch(texCoordTexels, record + int(kUvRecordCorners) + k); }
+vec3 loadCornerColor(int record, int k) { return texelFetch(texCoordTexels, record + int(kUvRecordColors) + k).rgb; }
+// `ref` is Material's texture reference + 1.
+TextureRef loadTextureRef(uint ref) {
+  int r = int((ref - 1u) * kTextureRefTexels);
+  return TextureRef(texelFetch(textureInfoTexels, r), texelFetch(textureInfoTexels, r + 1),
+                    texelFetch(textureInfoTexels, r + 2));
+}
+TextureLevel loadTextureLevel(uint i) { return TextureLevel(texelFetch(textureInfoTexels, int(i))); }
 
 
 #endif

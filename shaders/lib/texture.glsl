@@ -29,21 +29,23 @@ uint edgeTexel(int i, uint n, uint mode) {
   return uint(clamp(i, 0, int(n) - 1));
 }
 
-vec4 levelTexel(uvec4 level, uint x, uint y) { return texelFetch(textureTexels, int(level.x + y * level.y + x)); }
+vec4 levelTexel(TextureLevel level, uint x, uint y) {
+  return texelFetch(textureTexels, int(levelFirstTexel(level) + y * levelWidth(level) + x));
+}
 
-vec4 sampleLevelNearest(uvec4 level, vec2 uv) {
-  uint x = min(uint(uv.x * float(level.y)), level.y - 1u);
-  uint y = min(uint(uv.y * float(level.z)), level.z - 1u);
+vec4 sampleLevelNearest(TextureLevel level, vec2 uv) {
+  uint x = min(uint(uv.x * float(levelWidth(level))), levelWidth(level) - 1u);
+  uint y = min(uint(uv.y * float(levelHeight(level))), levelHeight(level) - 1u);
   return levelTexel(level, x, y);
 }
 
-vec4 sampleLevelBilinear(uvec4 level, vec2 uv, uint wrapS, uint wrapT) {
-  vec2 p = uv * vec2(level.yz) - 0.5;
+vec4 sampleLevelBilinear(TextureLevel level, vec2 uv, uint wrapS, uint wrapT) {
+  vec2 p = uv * vec2(levelWidth(level), levelHeight(level)) - 0.5;
   vec2 p0 = floor(p);
   vec2 f = p - p0;
   ivec2 i = ivec2(p0);
-  uint x0 = edgeTexel(i.x, level.y, wrapS), x1 = edgeTexel(i.x + 1, level.y, wrapS);
-  uint y0 = edgeTexel(i.y, level.z, wrapT), y1 = edgeTexel(i.y + 1, level.z, wrapT);
+  uint x0 = edgeTexel(i.x, levelWidth(level), wrapS), x1 = edgeTexel(i.x + 1, levelWidth(level), wrapS);
+  uint y0 = edgeTexel(i.y, levelHeight(level), wrapT), y1 = edgeTexel(i.y + 1, levelHeight(level), wrapT);
   vec4 top = mix(levelTexel(level, x0, y0), levelTexel(level, x1, y0), f.x);
   vec4 bottom = mix(levelTexel(level, x0, y1), levelTexel(level, x1, y1), f.x);
   return mix(top, bottom, f.y);
@@ -52,35 +54,33 @@ vec4 sampleLevelBilinear(uvec4 level, vec2 uv, uint wrapS, uint wrapT) {
 // Texture reference `ref` (+ 1) at texture coordinates `uvs` (both sets), with the triangle's lod
 // biases and the ray cone's footprint (0: the full-size image).
 vec4 baseColorTexelAt(uint ref, vec4 uvs, vec2 uvLodBias, float footprint) {
-  int r = int((ref - 1u) * kTextureRefTexels);
-  uvec4 head = texelFetch(textureInfoTexels, r);
-  uvec4 row0 = texelFetch(textureInfoTexels, r + 1);
-  uvec4 row1 = texelFetch(textureInfoTexels, r + 2);
-  bool set1 = head.w != 0u;
+  TextureRef tex = loadTextureRef(ref);
+  bool set1 = readsUvSet1(tex);
   vec3 uv1 = vec3(set1 ? uvs.zw : uvs.xy, 1.0);
-  vec2 uv = vec2(dot(uintBitsToFloat(row0.xyz), uv1), dot(uintBitsToFloat(row1.xyz), uv1));
-  uint wrapS = head.z & 3u;
-  uint wrapT = (head.z >> 2u) & 3u;
-  bool nearest = (head.z & 16u) != 0u;
+  vec2 uv = vec2(dot(uvTransformRow0(tex), uv1), dot(uvTransformRow1(tex), uv1));
+  uint wrapS = wrapModeS(tex);
+  uint wrapT = wrapModeT(tex);
+  bool nearest = magnifiesNearest(tex);
   vec2 w = vec2(wrapAxis(uv.x, wrapS), wrapAxis(uv.y, wrapT));
-  uvec4 base = texelFetch(textureInfoTexels, int(head.x));
+  TextureLevel base = loadTextureLevel(textureFirstLevel(tex));
   if (TEXTURE_FILTER == kTextureNearest) return sampleLevelNearest(base, w);
   if (TEXTURE_FILTER == kTextureBilinear) return nearest ? sampleLevelNearest(base, w) : sampleLevelBilinear(base, w, wrapS, wrapT);
   // Ray cones: lambda = 0.5 log2(texel area / world area) + log2(width / |n.d|) (RTG eq. 20.7).
-  float lod = (set1 ? uvLodBias.y : uvLodBias.x) + uintBitsToFloat(row0.w) + log2(max(footprint, 1e-30));
+  float lod = (set1 ? uvLodBias.y : uvLodBias.x) + textureLodOffset(tex) + log2(max(footprint, 1e-30));
   if (nearest && lod <= 0.0) return sampleLevelNearest(base, w); // magnified: the sampler's filter
-  lod = clamp(lod, 0.0, float(head.y - 1u));
+  lod = clamp(lod, 0.0, float(textureLevelCount(tex) - 1u));
   // Minified, the sampler's minFilter (gpu_scene.cpp packs it): which levels, and which texels in them.
-  uint minLevels = (head.z >> 5u) & 3u;
-  bool minNearest = lod > 0.0 && (head.z & 128u) != 0u;
-  if (lod > 0.0 && minLevels != 0u) {
-    uvec4 level = minLevels == 2u ? base : texelFetch(textureInfoTexels, int(head.x + uint(lod + 0.5)));
+  uint minLevels = minifiedLevels(tex);
+  bool minNearest = lod > 0.0 && minifiesNearest(tex);
+  if (lod > 0.0 && minLevels != kMinLevelsBlend) {
+    TextureLevel level =
+        minLevels == kMinLevelsBase ? base : loadTextureLevel(textureFirstLevel(tex) + uint(lod + 0.5));
     return minNearest ? sampleLevelNearest(level, w) : sampleLevelBilinear(level, w, wrapS, wrapT);
   }
   uint l0 = uint(lod);
-  uint l1 = min(l0 + 1u, head.y - 1u);
-  uvec4 level0 = texelFetch(textureInfoTexels, int(head.x + l0));
-  uvec4 level1 = texelFetch(textureInfoTexels, int(head.x + l1));
+  uint l1 = min(l0 + 1u, textureLevelCount(tex) - 1u);
+  TextureLevel level0 = loadTextureLevel(textureFirstLevel(tex) + l0);
+  TextureLevel level1 = loadTextureLevel(textureFirstLevel(tex) + l1);
   vec4 a = minNearest ? sampleLevelNearest(level0, w) : sampleLevelBilinear(level0, w, wrapS, wrapT);
   vec4 b = minNearest ? sampleLevelNearest(level1, w) : sampleLevelBilinear(level1, w, wrapS, wrapT);
   return mix(a, b, lod - float(l0));
@@ -105,11 +105,9 @@ bool alphaCutOut(uint index, vec3 bary) {
   float alpha = baseAlpha(m);
   uint ref = textureRefPlusOne(m);
   uint uvBase = triangleUvBasePlusOne(tri);
-  if (TEXTURES && cutoff > 0.0 && ref != 0u && uvBase != 0u &&
-      texelFetch(texCoordTexels, int(uvBase - 1u) + 3).w != 0.0) {
+  if (TEXTURES && cutoff > 0.0 && ref != 0u && uvBase != 0u && hasTexCoords(loadUvInfo(int(uvBase - 1u)))) {
     int b = int(uvBase - 1u);
-    vec4 uvs = bary.x * texelFetch(texCoordTexels, b) + bary.y * texelFetch(texCoordTexels, b + 1) +
-               bary.z * texelFetch(texCoordTexels, b + 2);
+    vec4 uvs = bary.x * loadUvCorner(b, 0) + bary.y * loadUvCorner(b, 1) + bary.z * loadUvCorner(b, 2);
     alpha *= baseColorTexelAt(ref, uvs, vec2(0.0), 0.0).a;
   }
   return alpha < cutoff;

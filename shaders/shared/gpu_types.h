@@ -8,6 +8,7 @@
 #define VKRAY_GPU_TYPES_H
 
 #ifdef __cplusplus
+#include <bit>
 #include <cstdint>
 #include <glm/glm.hpp>
 namespace vkray::gpu {
@@ -123,20 +124,28 @@ VKRAY_CONST(uint, kTextureNearest, 0u);  // level 0, nearest texel
 VKRAY_CONST(uint, kTextureBilinear, 1u); // level 0, bilinear
 VKRAY_CONST(uint, kTextureCone, 2u);     // trilinear between the levels a ray cone picks
 
-// Textures. A texture reference (one per textured material) is kTextureRefTexels RGBA32UI texels
-// of TextureInfo: (first level record, level count, wrapS | wrapT << 2 | nearest << 4, uv set),
-// then floatBits(uv transform row 0, lod offset) and floatBits(row 1, 0); the lod offset is
-// 0.5 log2(width * height * |det(transform)|) of level 0. A level record is (first texel in
-// Texels, width, height, 0). A textured triangle's uv record is 4 RGBA32F texels of TexCoords: its
-// corners (xy set 0, zw set 1), then (0.5 log2(uv area / world area) for set 0 and set 1, colours,
-// uvs): `uvs` 1 when the corners hold texture coordinates, `colours` 1 when 3 more texels follow
-// with the corners' vertex colours (linear RGBA; glTF COLOR_0), which multiply the base colour.
-VKRAY_CONST(uint, kTextureRefTexels, 3u);
+// Textures: the records TextureRef and TextureLevel in TextureInfo[], and a textured triangle's uv
+// record in TexCoords[] (structs below).
+VKRAY_CONST(uint, kTextureRefTexels, 3u); // TextureInfo texels per TextureRef
+// A uv record: kUvRecordTexels RGBA32F texels, the corners' texture coordinates and the record's
+// UvInfo, then, where UvInfo says so, kUvRecordColorTexels with the corners' vertex colours.
+VKRAY_CONST(uint, kUvRecordCorners, 0u);     // texels 0..2: corner k's uvs, xy set 0, zw set 1
+VKRAY_CONST(uint, kUvRecordInfo, 3u);        // texel 3: UvInfo
 VKRAY_CONST(uint, kUvRecordTexels, 4u);      // without vertex colours
+VKRAY_CONST(uint, kUvRecordColors, 4u);      // texels 4..6: corner k's colour (linear RGBA; glTF COLOR_0)
 VKRAY_CONST(uint, kUvRecordColorTexels, 3u); // the vertex colours after them
 VKRAY_CONST(uint, kWrapRepeat, 0u);
 VKRAY_CONST(uint, kWrapClamp, 1u);
 VKRAY_CONST(uint, kWrapMirror, 2u);
+// TextureRef's sampler word: wrap s in bits 0-1 and wrap t in bits 2-3 (kWrap*), then flags.
+VKRAY_CONST(uint, kSamplerWrapMask, 3u);
+VKRAY_CONST(uint, kSamplerWrapTShift, 2u);
+VKRAY_CONST(uint, kSamplerMagNearest, 16u);    // bit 4: a magnified sample reads the nearest texel
+VKRAY_CONST(uint, kSamplerMinLevelsShift, 5u); // bits 5-6: the levels a minified sample reads (kMinLevels*)
+VKRAY_CONST(uint, kSamplerMinNearest, 128u);   // bit 7: a minified sample reads nearest texels
+VKRAY_CONST(uint, kMinLevelsBlend, 0u);        // the two levels around the lod, blended
+VKRAY_CONST(uint, kMinLevelsNearest, 1u);      // the level nearest the lod
+VKRAY_CONST(uint, kMinLevelsBase, 2u);         // level 0 alone
 
 // ---- Limits shared by host validation and shader arrays ------------------------------------------
 VKRAY_CONST(uint, kMaxStackSize, 16u);      // deepest explicit stack compiled into a pipeline
@@ -162,10 +171,9 @@ VKRAY_CONST(uint, kBvhStackSize, 32u);     // the builder caps tree depth at thi
 
 // Entry points (shaders/entry.comp): for each tile of kEntryTileSize x kEntryTileSize pixels (one
 // workgroup of the trace kernels), the BVH subtrees its eye rays' frustum reaches, at most
-// kEntryPointsMax, nearest first. Two uvec4 per tile, tiles row-major from the band's first row
-// (PushConstants.imageRow0): words 0..5 the walk's stack, bottom first (the farthest entry point at
-// the bottom), word 6 the entry point to start at (kBvhNoRef: the frustum meets nothing), word 7
-// the stack's height. An eye ray loads them as its walk's starting state.
+// kEntryPointsMax, nearest first. One TileEntryPoints per tile (below), tiles row-major from the
+// band's first row (PushConstants.imageRow0): the walk's stack, the entry point to start at and the
+// stack's height. An eye ray loads them as its walk's starting state.
 VKRAY_CONST(uint, kEntryTileSize, 8u);
 VKRAY_CONST(uint, kEntryStackSlots, 6u);
 VKRAY_CONST(uint, kEntryPointsMax, 7u); // kEntryStackSlots + 1
@@ -213,6 +221,28 @@ struct Polygon {
   uvec4 meta; // x: first vertex in PolyVertices[]; y: vertex count; z: material; w: unused
 };
 
+// A textured material's texture (Material.transmission.z): kTextureRefTexels RGBA32UI texels of
+// TextureInfo[], floats as their bits. The uv transform is uv' = T R S uv written as rows (a b e;
+// c d f), as host/scene/texture.h's TextureTransform::apply.
+struct TextureRef {
+  uvec4 levels; // x: first TextureLevel in TextureInfo[]; y: level count; z: sampler word (kSampler*); w: uv set
+  uvec4 row0;   // xyz: the transform's row 0 (a b e); w: lod offset, 0.5 log2(width * height * |det(transform)|)
+                // of level 0 (log2 texels per unit of uv)
+  uvec4 row1;   // xyz: the transform's row 1 (c d f); w: unused
+};
+
+// One mip level of a texture: an RGBA32UI texel of TextureInfo[], after every TextureRef.
+struct TextureLevel {
+  uvec4 extent; // x: first texel in Texels[] (row-major, linear RGBA); y: width, z: height (texels); w: unused
+};
+
+// Texel kUvRecordInfo of a triangle's uv record (RGBA32F, TexCoords[]).
+struct UvInfo {
+  vec4 lodAndFlags; // x, y: uv set 0's, set 1's lod bias, 0.5 log2(uv area / world area) (log2 uv units per
+                    // world unit; the triangle's part of the ray-cone lod, RTG eq. 20.4); z: 1 when vertex
+                    // colours follow, else 0; w: 1 when the corners hold texture coordinates, else 0
+};
+
 // Flattened BVH node (pbrt's LinearBVHNode layout), the host's form of the tree: depth first, the
 // first child follows its parent, so an interior node stores only the index of its second child.
 // The shader reads the BvhWideNode records made from it (host/accel/bvh.h, wideBvh).
@@ -237,6 +267,14 @@ struct BvhWideNode {
   uint unused0;
   vec3 max1;
   uint unused1;
+};
+
+// A tile's entry points (see kEntryTileSize): two uvec4 of EntryPoints[], written by entry.comp
+// and read as texels by the trace kernels.
+struct TileEntryPoints {
+  uvec4 stack;    // the walk's stack words 0..3, bottom first (the farthest entry point at the bottom)
+  uvec4 stackTop; // xy: stack words 4, 5; z: the entry point to start at (kBvhNoRef: the frustum meets nothing);
+                  // w: the stack's height (words in use)
 };
 
 #ifndef __cplusplus
@@ -280,6 +318,50 @@ vec3 polygonNormal(Polygon q) { return q.plane.xyz; }
 uint polygonFirstVertex(Polygon q) { return q.meta.x; }
 uint polygonVertexCount(Polygon q) { return q.meta.y; }
 uint polygonMaterial(Polygon q) { return q.meta.z; }
+
+uint textureFirstLevel(TextureRef t) { return t.levels.x; } // index of a TextureLevel in TextureInfo[]
+uint textureLevelCount(TextureRef t) { return t.levels.y; }
+uint wrapModeS(TextureRef t) { return t.levels.z & kSamplerWrapMask; } // kWrap*
+uint wrapModeT(TextureRef t) { return (t.levels.z >> kSamplerWrapTShift) & kSamplerWrapMask; } // kWrap*
+bool magnifiesNearest(TextureRef t) { return (t.levels.z & kSamplerMagNearest) != 0u; }
+uint minifiedLevels(TextureRef t) { return (t.levels.z >> kSamplerMinLevelsShift) & 3u; } // kMinLevels*
+bool minifiesNearest(TextureRef t) { return (t.levels.z & kSamplerMinNearest) != 0u; }
+bool readsUvSet1(TextureRef t) { return t.levels.w != 0u; } // else uv set 0
+vec3 uvTransformRow0(TextureRef t) { return uintBitsToFloat(t.row0.xyz); }
+vec3 uvTransformRow1(TextureRef t) { return uintBitsToFloat(t.row1.xyz); }
+float textureLodOffset(TextureRef t) { return uintBitsToFloat(t.row0.w); } // log2 texels per uv unit
+
+uint levelFirstTexel(TextureLevel l) { return l.extent.x; } // in Texels[]
+uint levelWidth(TextureLevel l) { return l.extent.y; } // texels
+uint levelHeight(TextureLevel l) { return l.extent.z; } // texels
+
+vec2 triangleLodBias(UvInfo i) { return i.lodAndFlags.xy; } // x: uv set 0, y: set 1; log2 uv units per world unit
+bool hasVertexColors(UvInfo i) { return i.lodAndFlags.z != 0.0; } // kUvRecordColorTexels follow
+bool hasTexCoords(UvInfo i) { return i.lodAndFlags.w != 0.0; } // else the corners' uvs are zero
+
+// Word k < kEntryStackSlots of the walk's stack, bottom first.
+uint entryStackWord(TileEntryPoints e, uint k) { return k < 4u ? e.stack[k] : e.stackTop[k - 4u]; }
+uint entryStart(TileEntryPoints e) { return e.stackTop.z; } // kBvhNoRef: the tile's frustum meets nothing
+uint entryStackHeight(TileEntryPoints e) { return e.stackTop.w; }
+
+// A pixel of Image[] and PrevImage[]: vec4(sum of its samples' linear RGB radiance, sample count).
+vec3 pixelRadianceSum(vec4 p) { return p.rgb; }
+float pixelSampleCount(vec4 p) { return p.w; }
+// clang-format on
+#endif
+
+#ifdef __cplusplus
+// The host's reads and writes of the words it moves or checks after packing, named as in the shaders.
+// clang-format off
+inline uint triangleMaterial(const Triangle& t) { return std::bit_cast<uint>(t.v0.w); }
+inline uint triangleNormalBase(const Triangle& t) { return std::bit_cast<uint>(t.v1.w); } // kNoNormals: flat
+inline uint triangleUvBasePlusOne(const Triangle& t) { return std::bit_cast<uint>(t.v2.w); } // 0: none
+inline void setTriangleMaterial(Triangle& t, uint material) { t.v0.w = std::bit_cast<float>(material); }
+inline void setTriangleNormalBase(Triangle& t, uint first) { t.v1.w = std::bit_cast<float>(first); }
+inline void setTriangleUvBasePlusOne(Triangle& t, uint firstPlusOne) { t.v2.w = std::bit_cast<float>(firstPlusOne); }
+inline uint polygonFirstVertex(const Polygon& q) { return q.meta.x; }
+inline uint polygonVertexCount(const Polygon& q) { return q.meta.y; }
+inline bool hasVertexColors(const UvInfo& i) { return i.lodAndFlags.z != 0.0f; }
 // clang-format on
 #endif
 
