@@ -127,9 +127,9 @@ int main(int argc, char** argv) {
 
   BenchAccuracyArgs benchAcc;
   auto* benchAccCmd = benchCmd->add_subcommand("accuracy", "error against time for every accuracy knob");
-  benchAccCmd->add_option(
-      "scenes", benchAcc.scenes,
-      "scene files (default: showcase, glass, seed, numerics-cracks, numerics-far-sphere, textured)");
+  benchAccCmd->add_option("scenes", benchAcc.scenes,
+                          "scene files (default: showcase, glass, seed, numerics-cracks, numerics-far-sphere, "
+                          "numerics-huge-ground, textured)");
   benchAccCmd->add_option("--out", benchAcc.out, "output directory (CSV, reference and heat-map images)");
   benchAccCmd->add_option("--runs", benchAcc.runs, "timed runs per point")->check(CLI::Range(1, 1000));
   benchAccCmd->add_option("--height", benchAcc.height, "image height (aspect kept)")->check(CLI::Range(8, 4096));
