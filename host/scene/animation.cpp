@@ -211,7 +211,7 @@ Animation readAnimation(const JsonNode& node, const Scene& scene) {
   a.frames = static_cast<int>(node.at("frames").integer(1, kMaxFrames));
   if (auto v = node.find("fps")) a.fps = v->number(1e-3, 1e6);
   if (auto v = node.find("interpolation")) {
-    a.interpolation = v->choice({"linear", "smooth"}) == "smooth" ? Interpolation::Smooth : Interpolation::Linear;
+    a.interpolation = v->enumValue<Interpolation>();
   }
   if (auto v = node.find("camera")) readCameraKeys(*v, a);
   if (auto v = node.find("objects")) readObjectKeys(*v, scene, a);

@@ -2,6 +2,7 @@
 // keys into the static scene of one frame, so that everything downstream of the loader stays static.
 #pragma once
 
+#include <array>
 #include <optional>
 #include <string>
 #include <vector>
@@ -20,6 +21,10 @@ enum class Interpolation {
   // key i is (p[i+1] - p[i-1]) / (f[i+1] - f[i-1]), one-sided at the first and last key), as cubic
   // Hermite segments. Timing follows the frames the keys are at, not the distance between values.
   Smooth,
+};
+template <> struct EnumNames<Interpolation> {
+  static constexpr std::array<EnumName<Interpolation>, 2> values{
+      {{Interpolation::Linear, "linear"}, {Interpolation::Smooth, "smooth"}}};
 };
 
 // One animated quantity: the keys that give it, frames strictly increasing.

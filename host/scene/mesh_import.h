@@ -50,6 +50,10 @@ enum class MeshNormals {
   Flat,   // geometric normals only
   Smooth, // area-weighted vertex normals computed over shared vertices (the file's are ignored)
 };
+template <> struct EnumNames<MeshNormals> {
+  static constexpr std::array<EnumName<MeshNormals>, 3> values{
+      {{MeshNormals::Auto, "auto"}, {MeshNormals::Flat, "flat"}, {MeshNormals::Smooth, "smooth"}}};
+};
 
 // What a `mesh` object asks for.
 struct MeshRequest {

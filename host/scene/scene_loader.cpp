@@ -359,10 +359,7 @@ void readMesh(const JsonNode& obj, LoadContext& ctx) {
   request.shownAs = request.file.lexically_normal().string();
   if (auto t = obj.find("transform")) request.worldFromMesh = readTransform(*t);
   if (obj.find("material")) request.material = readObjectMaterial(obj, ctx);
-  if (auto n = obj.find("normals")) {
-    std::string mode = n->choice({"auto", "flat", "smooth"});
-    request.normals = mode == "flat" ? MeshNormals::Flat : mode == "smooth" ? MeshNormals::Smooth : MeshNormals::Auto;
-  }
+  if (auto n = obj.find("normals")) request.normals = n->enumValue<MeshNormals>();
   std::string ext = request.file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
