@@ -18,48 +18,6 @@
 namespace vkray::test::numerics {
 namespace {
 
-std::string point(const dvec3& p) {
-  char buf[128];
-  std::snprintf(buf, sizeof buf, "[%.17g, %.17g, %.17g]", p.x, p.y, p.z);
-  return buf;
-}
-
-// Everything with a position moved by `shift`; directions, colours and checker sizes stay.
-Scene shifted(Scene scene, const dvec3& shift) {
-  scene.camera.position += shift;
-  scene.camera.lookAt += shift;
-  for (auto& l : scene.lights) l.position += shift;
-  for (auto& s : scene.spheres) s.center += shift;
-  for (auto& p : scene.planes) p.offset -= glm::dot(p.normal, shift); // n.x + D = 0
-  for (auto& poly : scene.polygons)
-    for (auto& v : poly.vertices) v += shift;
-  for (auto& t : scene.triangles)
-    for (auto& v : t.v) v += shift;
-  return scene;
-}
-
-// sRGB encoding of a linear value, as the PNG writer does it, in 8-bit steps.
-int srgb8(float linear) {
-  double c = std::clamp(static_cast<double>(linear), 0.0, 1.0);
-  double s = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
-  return static_cast<int>(std::lround(s * 255.0));
-}
-
-bool pixelOff(const glm::vec3& a, const glm::vec3& b, int steps = 6) {
-  for (int c = 0; c < 3; ++c)
-    if (std::abs(srgb8(a[c]) - srgb8(b[c])) > steps) return true;
-  return false;
-}
-
-// The share of pixels more than `steps` sRGB 8-bit steps off in any channel.
-double shareOff(const Image& a, const Image& b, int steps = 6) {
-  EXPECT_EQ(a.pixels.size(), b.pixels.size());
-  std::size_t off = 0;
-  for (std::size_t i = 0; i < a.pixels.size() && i < b.pixels.size(); ++i)
-    off += pixelOff(a.pixels[i], b.pixels[i], steps);
-  return static_cast<double>(off) / static_cast<double>(a.pixels.size());
-}
-
 float brightest(const Image& image) {
   float worst = 0.0f;
   for (const auto& p : image.pixels) worst = std::max({worst, p.x, p.y, p.z});
@@ -136,9 +94,9 @@ Scene slabScene(double thickness, bool backFace = true) {
 // alone changes > 20 % of the pixels; measured 23 %).
 TEST(NumericsGlass, SlabTenMicronsThickRendersAsTheThickSlab) {
   for (dvec3 shift : {dvec3(0.0), dvec3(1e4, -1e4, 1e4)}) {
-    Image thick = render(shifted(slabScene(1e-2), shift)).image;
-    RenderResult thin = render(shifted(slabScene(1e-5), shift));
-    Image frontOnly = render(shifted(slabScene(1e-5, false), shift)).image;
+    Image thick = render(transformed(slabScene(1e-2), 1.0, shift)).image;
+    RenderResult thin = render(transformed(slabScene(1e-5), 1.0, shift));
+    Image frontOnly = render(transformed(slabScene(1e-5, false), 1.0, shift)).image;
     double share = shareOff(thick, thin.image);
     double lost = shareOff(thick, frontOnly);
     float worst = brightest(thin.image);

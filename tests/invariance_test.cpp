@@ -20,52 +20,6 @@
 namespace vkray::test::numerics {
 namespace {
 
-// x -> scale * x + shift applied to everything with a position or a length: camera, lights, every
-// primitive, checker squares and absorption (per unit length). Directions and colours stay.
-void transformScene(Scene& scene, double scale, const dvec3& shift) {
-  auto point = [&](const dvec3& p) { return scale * p + shift; };
-  scene.camera.position = point(scene.camera.position);
-  scene.camera.lookAt = point(scene.camera.lookAt);
-  for (auto& l : scene.lights) l.position = point(l.position);
-  for (auto& s : scene.spheres) {
-    s.center = point(s.center);
-    s.radius *= scale;
-  }
-  // n.x + D = 0 and x' = s x + t give n.x' + (s D - n.t) = 0.
-  for (auto& p : scene.planes) p.offset = scale * p.offset - glm::dot(p.normal, shift);
-  for (auto& poly : scene.polygons)
-    for (auto& v : poly.vertices) v = point(v);
-  for (auto& t : scene.triangles)
-    for (auto& v : t.v) v = point(v);
-  for (auto& m : scene.materials) {
-    if (m.checker) m.checker->scale *= scale;
-    m.absorption /= scale;
-  }
-}
-
-// sRGB encoding of a linear value, as the PNG writer does it, in 8-bit steps.
-int srgb8(float linear) {
-  double c = std::clamp(static_cast<double>(linear), 0.0, 1.0);
-  double s = c <= 0.0031308 ? 12.92 * c : 1.055 * std::pow(c, 1.0 / 2.4) - 0.055;
-  return static_cast<int>(std::lround(s * 255.0));
-}
-
-// The share of pixels whose sRGB 8-bit value differs by more than `steps` in any channel.
-double shareOff(const Image& a, const Image& b, int steps = 6) {
-  EXPECT_EQ(a.width, b.width);
-  EXPECT_EQ(a.height, b.height);
-  std::size_t off = 0;
-  for (std::size_t i = 0; i < a.pixels.size() && i < b.pixels.size(); ++i) {
-    for (int c = 0; c < 3; ++c) {
-      if (std::abs(srgb8(a.pixels[i][c]) - srgb8(b.pixels[i][c])) > steps) {
-        ++off;
-        break;
-      }
-    }
-  }
-  return static_cast<double>(off) / static_cast<double>(a.pixels.size());
-}
-
 RenderResult renderSmall(Scene scene, std::uint32_t width = 96) {
   double aspect = static_cast<double>(scene.render.height) / scene.render.width;
   scene.render.width = width;
@@ -123,8 +77,7 @@ dvec3 wholeCheckerPeriods(const Scene& scene, double scale, const dvec3& shift) 
 void expectInvariant(const Scene& base, const std::string& name) {
   Image reference = renderSmall(base).image;
   for (const Placement& where : placements()) {
-    Scene moved = base;
-    transformScene(moved, where.scale, wholeCheckerPeriods(base, where.scale, where.shift));
+    Scene moved = transformed(base, where.scale, wholeCheckerPeriods(base, where.scale, where.shift));
     RenderResult result = renderSmall(moved);
     double share = shareOff(reference, result.image);
     if (const char* dump = std::getenv("VKRAY_INVARIANCE_DUMP")) { // for looking at a failure

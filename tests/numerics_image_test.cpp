@@ -15,12 +15,6 @@
 namespace vkray::test::numerics {
 namespace {
 
-std::string point(const dvec3& p) {
-  char buf[128];
-  std::snprintf(buf, sizeof buf, "[%.17g, %.17g, %.17g]", p.x, p.y, p.z);
-  return buf;
-}
-
 // A small scene with every primitive kind, a checkered floor, mirror reflection and shadows from
 // two lights, its every coordinate shifted by `shift`.
 std::string shiftedScene(const dvec3& shift) {

@@ -316,4 +316,47 @@ std::string str(double x) {
   return buf;
 }
 
+std::string point(const dvec3& p) {
+  char buf[128];
+  std::snprintf(buf, sizeof buf, "[%.17g, %.17g, %.17g]", p.x, p.y, p.z);
+  return buf;
+}
+
+Scene transformed(Scene scene, double scale, const dvec3& shift) {
+  auto place = [&](const dvec3& p) { return scale * p + shift; };
+  scene.camera.position = place(scene.camera.position);
+  scene.camera.lookAt = place(scene.camera.lookAt);
+  for (auto& l : scene.lights) l.position = place(l.position);
+  for (auto& s : scene.spheres) {
+    s.center = place(s.center);
+    s.radius *= scale;
+  }
+  // n.x + D = 0 and x' = s x + t give n.x' + (s D - n.t) = 0.
+  for (auto& p : scene.planes) p.offset = scale * p.offset - glm::dot(p.normal, shift);
+  for (auto& poly : scene.polygons)
+    for (auto& v : poly.vertices) v = place(v);
+  for (auto& t : scene.triangles)
+    for (auto& v : t.v) v = place(v);
+  for (auto& m : scene.materials) {
+    if (m.checker) m.checker->scale *= scale;
+    m.absorption /= scale;
+  }
+  return scene;
+}
+
+bool pixelOff(const glm::vec3& a, const glm::vec3& b, int steps) {
+  for (int c = 0; c < 3; ++c)
+    if (std::abs(int(encodeSrgb8(a[c])) - int(encodeSrgb8(b[c]))) > steps) return true;
+  return false;
+}
+
+double shareOff(const Image& a, const Image& b, int steps) {
+  EXPECT_EQ(a.width, b.width);
+  EXPECT_EQ(a.height, b.height);
+  std::size_t off = 0;
+  for (std::size_t i = 0; i < a.pixels.size() && i < b.pixels.size(); ++i)
+    off += pixelOff(a.pixels[i], b.pixels[i], steps);
+  return static_cast<double>(off) / static_cast<double>(a.pixels.size());
+}
+
 } // namespace vkray::test::numerics

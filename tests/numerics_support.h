@@ -14,6 +14,7 @@
 
 #include <glm/glm.hpp>
 
+#include "image/image.h"
 #include "render/probe.h"
 #include "scene/scene.h"
 
@@ -170,5 +171,19 @@ void report(const std::string& name, const Tally& robust, const Tally& naive);
 // Format helpers for failure messages.
 std::string str(const dvec3& v);
 std::string str(double x);
+
+// A point as a JSON array with every digit of the double (scene text for sceneFromJson).
+std::string point(const dvec3& p);
+
+// ---- Whole-image properties ---------------------------------------------------------------------
+
+// x -> scale * x + shift applied to everything with a position or a length: camera, lights, every
+// primitive, checker squares and absorption (per unit length). Directions and colours stay.
+Scene transformed(Scene scene, double scale, const dvec3& shift);
+
+// Whether two pixels differ by more than `steps` sRGB 8-bit steps (encodeSrgb8, as in PNG files) in
+// any channel; and the share of such pixels between two images of one size.
+bool pixelOff(const glm::vec3& a, const glm::vec3& b, int steps = 6);
+double shareOff(const Image& a, const Image& b, int steps = 6);
 
 } // namespace vkray::test::numerics
