@@ -3,6 +3,10 @@
 #ifndef VKRAY_BINDINGS_GLSL
 #define VKRAY_BINDINGS_GLSL
 
+// Read-only texel buffers are samplerless (textureBuffer, read with texelFetch): a sampled image of
+// Dim Buffer is not valid SPIR-V for Vulkan, and Mesa 25 reports it through the validation messenger.
+#extension GL_EXT_samplerless_texture_functions : require
+
 #include "../shared/gpu_types.h"
 #include "common.glsl"
 #include "specialization.glsl"
@@ -26,17 +30,17 @@ layout(std430, binding = kBindingPolyVertices) readonly buffer PolyVertices { ve
 // compiles a texelFetch as a call to a sampling function, an imageLoad into the kernel itself
 // (7 % fewer instructions executed on the mesh scene).
 layout(binding = kBindingTriangles, rgba32ui) uniform readonly restrict uimageBuffer triangleTexels; // 3 per Triangle
-layout(binding = kBindingNormals) uniform samplerBuffer normalTexels;    // 1 per vertex normal
+layout(binding = kBindingNormals) uniform textureBuffer normalTexels;    // 1 per vertex normal
 layout(binding = kBindingBvhNodes, rgba32ui) uniform readonly restrict uimageBuffer nodeTexels; // 4 per BvhWideNode
-layout(binding = kBindingPrimRefs) uniform usamplerBuffer primRefTexels; // 1 per reference
+layout(binding = kBindingPrimRefs) uniform utextureBuffer primRefTexels; // 1 per reference
 
 layout(std140, binding = kBindingSceneUbo) uniform SceneBlock { SceneUbo small; };
 // Written by shaders/entry.comp as a storage buffer, read here as texels once per invocation.
-layout(binding = kBindingEntryTexels) uniform usamplerBuffer entryTexels;
+layout(binding = kBindingEntryTexels) uniform utextureBuffer entryTexels;
 // Textures (TEXTURES only; layout in shared/gpu_types.h).
-layout(binding = kBindingTexCoords) uniform samplerBuffer texCoordTexels;
-layout(binding = kBindingTextureInfo) uniform usamplerBuffer textureInfoTexels;
-layout(binding = kBindingTexels) uniform samplerBuffer textureTexels;
+layout(binding = kBindingTexCoords) uniform textureBuffer texCoordTexels;
+layout(binding = kBindingTextureInfo) uniform utextureBuffer textureInfoTexels;
+layout(binding = kBindingTexels) uniform textureBuffer textureTexels;
 
 // Loop bounds: a specialization constant where the host baked the count in (the loop unrolls).
 uint sphereCount() { return SPHERE_COUNT != kRuntimeCount ? SPHERE_COUNT : opaqueUniform(frame.sphereCount); }
