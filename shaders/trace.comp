@@ -68,13 +68,18 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   float travelled = 0.0;
   float travelledStack[STACK_SIZE];
   uint maxDepth = opaqueUniform(frame.maxDepth);
-  // The loop's own exit leaves nothing pending. llvmpipe ends every loop of an invocation once its
-  // SIMD group has run 65535 loop iterations in all; a glass tree cut short that way still has its
-  // current ray or stacked branches, and the sample is counted as truncated instead of passing
-  // silently as a darker pixel. (A flag set before the break would be folded away by the compiler,
-  // which cannot know of the limit.)
+  // The loop's own exit leaves nothing pending. A tree cut short, by the ray budget below or by a
+  // driver's loop limit (Mesa 22's llvmpipe ends every loop of an invocation once its SIMD group has
+  // run 65535 loop iterations in all), still has its current ray or stacked branches, and the sample
+  // is counted as truncated instead of passing silently as a darker pixel. (A flag set before the
+  // break would be folded away by the compiler, which cannot know of a driver's limit.)
   bool haveNext = true;
+  // Rays of this tree so far: a glass tree stops at kMaxTreeRays (counted as truncated below), on
+  // every driver alike, rather than running 2^depth rays where no driver cuts the loop.
+  uint treeRays = 0u;
   while (true) {
+    if (REFRACTION && treeRays == kMaxTreeRays) break;
+    treeRays++;
     uint depth = cur.depthKind & 0xFFFFu;
     countRay(cur.depthKind >> 16u, depth);
     TraceRay r = makeTraceRay(cur.origin, cur.dir);

@@ -170,8 +170,8 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     options.countStats = false;
 
     // The reference: deep, many samples, robust, float64 where the device has it, and a bailout of
-    // 1e-6 rather than 0: at depth 16 a glass tree without bailout has up to 2^16 branches per
-    // sample, which llvmpipe's loop limit cuts short (the kernel counts it as `truncated`), while
+    // 1e-6 rather than 0: at depth 16 a glass tree without bailout has up to 2^17 rays per sample,
+    // which the kernel's ray budget cuts short (it counts them as `truncated`), while
     // the branches below 1e-6 change no pixel of the glass scene by more than 4e-5 (measured
     // against 1e-5; docs/accuracy.md).
     RenderSettings ref = scene.render;
@@ -187,7 +187,7 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     RenderResult reference = renderer.render(scene.camera, ref, counted);
     if (reference.stats.truncated > 0) {
       throw Error(name + ": the reference lost " + std::to_string(reference.stats.truncated) +
-                  " samples to the driver's loop limit; it would not be a reference");
+                  " samples to the ray budget per sample; it would not be a reference");
     }
     writeImage(args.out / (name + "-reference.png"), reference.image);
     // The same reference with one centre sample per pixel: against it, a 1-spp point's error is
