@@ -35,6 +35,7 @@ CLI::Validator realRange(double lo, double hi);
 // The renderer's own switches, for comparison runs: each maps onto a RenderOptions field.
 struct KernelFlags {
   bool noSpecialize = false;        // --no-specialize
+  bool noSpirvFolding = false;      // --no-spirv-folding
   bool noRowCulling = false;        // --no-row-culling
   bool noEntryPoints = false;       // --no-entry-points
   std::string sceneMemory = "auto"; // --scene-memory, a SceneMemory name

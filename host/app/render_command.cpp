@@ -205,6 +205,12 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   }
   printStat("upload", renderer.uploadMs());
   printStat("pipeline", result.timings.pipelineMs);
+  // What each pipeline cost to create (specialize and compile); they build side by side.
+  for (const PipelineBuild& p : result.timings.pipelinesBuilt) {
+    std::printf("pipeline %s: %.2f ms (SPIR-V %.0f KiB", p.name.c_str(), p.ms, p.spirvBytes / 1024.0);
+    if (p.foldMs > 0) std::printf(", specialization folded in %.2f ms", p.foldMs);
+    std::printf(")\n");
+  }
   if (!cache) {
     std::printf("pipeline cache: off\n");
   } else if (std::size_t kept = cache->keptBytes(); kept == 0) {
@@ -309,9 +315,9 @@ int runRender(const RenderArgs& args) {
     }
     if (result.stats.truncated > 0) {
       std::fprintf(stderr,
-                   "vkray: warning: %llu samples were cut short by the driver's loop limit (llvmpipe stops a "
-                   "shader after 65535 loop iterations): raise render.bailout or lower max_depth\n",
-                   static_cast<unsigned long long>(result.stats.truncated));
+                   "vkray: warning: %llu samples were cut short: their ray tree reached %u rays (or the driver's "
+                   "loop limit): raise render.bailout or lower max_depth\n",
+                   static_cast<unsigned long long>(result.stats.truncated), gpu::kMaxTreeRays);
     }
 
     auto tw = Clock::now();

@@ -8,6 +8,11 @@
 #include "trace_spv.h"   // kTraceSpv: shaders/trace.comp
 #include "util/error.h"
 
+#include <algorithm>
+#include <chrono>
+#include <exception>
+#include <future>
+
 namespace vkray {
 
 SceneShape shapeOf(const GpuScene& g) {
@@ -77,8 +82,9 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
   // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   const bool center = !o.progressive && (s.spp == 1 || adaptive);
   auto key = [&](const RenderOptions& options, bool centerSample, bool refinePass) {
-    return PipelineKey{o.kernel, s.precision,
-                       specializationFor(f, s, options, shape, memory, centerSample, refinePass)};
+    return PipelineKey{o.kernel, s.precision, specializationFor(f, s, options, shape, memory, centerSample, refinePass),
+                       o.foldSpirv ? vulkan::SpecializationFolding::FoldSpirv
+                                   : vulkan::SpecializationFolding::DriverOnly};
   };
   plan.sample = key(o, center, false);
   if (o.countStats && o.progressive) {
@@ -96,66 +102,105 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
   return plan;
 }
 
+namespace {
+
+template <class Job, class Slot> bool queued(const std::vector<Job>& jobs, const Slot& slot) {
+  return std::any_of(jobs.begin(), jobs.end(), [&](const Job& j) { return j.slot == &slot; });
+}
+
+} // namespace
+
 KernelLibrary::KernelLibrary(const vulkan::Context& context, vk::PipelineLayout layout, vulkan::PipelineCache* cache)
     : context_(context), layout_(layout), cache_(cache) {}
 
 KernelSet KernelLibrary::realize(const KernelPlan& plan) {
-  KernelSet set;
-  set.sample = &trace(plan.sample, set.buildMs);
-  set.quietSample = plan.quietSample ? &trace(*plan.quietSample, set.buildMs) : set.sample;
+  std::vector<Job> jobs;
+  auto& sample = traceSlot(plan.sample, "", jobs);
+  auto& quietSample = plan.quietSample ? traceSlot(*plan.quietSample, " (quiet)", jobs) : sample;
+  std::unique_ptr<vulkan::ComputePipeline>* fill = nullptr;
+  std::unique_ptr<vulkan::ComputePipeline>* quietFill = nullptr;
   if (plan.fill) {
     // One fill per counting mode, whatever the scene.
-    set.fill = &fill(plan.countStats, set.buildMs);
-    set.quietFill = set.quietSample != set.sample ? &fill(false, set.buildMs) : set.fill;
+    fill = &fillSlot(plan.countStats, jobs);
+    quietFill = &quietSample != &sample ? &fillSlot(false, jobs) : fill;
   }
-  if (plan.entryPoints) set.entry = &entry(set.buildMs);
-  if (plan.refine) set.refine = &trace(*plan.refine, set.buildMs);
+  auto* entry = plan.entryPoints ? &entrySlot(jobs) : nullptr;
+  auto* refine = plan.refine ? &traceSlot(*plan.refine, " (refine)", jobs) : nullptr;
+
+  KernelSet set;
+  auto start = std::chrono::steady_clock::now();
+  auto build = [&](const Job& job) {
+    return std::make_unique<vulkan::ComputePipeline>(context_, job.code, layout_, job.spec,
+                                                     cache_ ? &cache_->cache() : nullptr, job.name, job.folding);
+  };
+  // vkCreateComputePipelines may run on several threads at once, with one pipeline cache
+  // (VkPipelineCache is internally synchronized); the first job runs on this thread.
+  std::vector<std::future<std::unique_ptr<vulkan::ComputePipeline>>> others;
+  for (std::size_t i = 1; i < jobs.size(); ++i) others.push_back(std::async(std::launch::async, build, jobs[i]));
+  std::exception_ptr failure;
+  if (!jobs.empty()) {
+    try {
+      *jobs[0].slot = build(jobs[0]);
+    } catch (...) {
+      failure = std::current_exception();
+    }
+  }
+  for (std::size_t i = 1; i < jobs.size(); ++i) {
+    try {
+      *jobs[i].slot = others[i - 1].get();
+    } catch (...) {
+      if (!failure) failure = std::current_exception();
+    }
+  }
+  if (failure) std::rethrow_exception(failure);
+  if (!jobs.empty()) {
+    set.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    for (const Job& job : jobs) {
+      const vulkan::ComputePipeline& p = **job.slot;
+      set.built.push_back(PipelineBuild{job.name, p.creationMs(), p.foldMs(), p.spirvBytes()});
+    }
+    if (cache_) cache_->save();
+  }
+  set.sample = sample.get();
+  set.quietSample = quietSample.get();
+  set.fill = fill ? fill->get() : nullptr;
+  set.quietFill = quietFill ? quietFill->get() : nullptr;
+  set.entry = entry ? entry->get() : nullptr;
+  set.refine = refine ? refine->get() : nullptr;
   return set;
 }
 
-const vulkan::ComputePipeline& KernelLibrary::trace(const PipelineKey& key, double& buildMs) {
-  auto it = trace_.find(key);
-  if (it == trace_.end()) {
-    bool f64 = key.precision == Precision::Float64;
-    if (f64 && !context_.float64Enabled()) {
-      throw InputError("render.precision", "float64 needs shaderFloat64, which " + context_.info().name + " lacks");
-    }
-    if (f64 && key.kernel == Kernel::Hits) throw InputError("render.precision", "the ray-query kernel is float32 only");
-    std::span<const std::uint32_t> code = key.kernel == Kernel::Hits ? std::span<const std::uint32_t>(kHitsSpv)
-                                          : f64                      ? std::span<const std::uint32_t>(kTrace64Spv)
-                                                                     : std::span<const std::uint32_t>(kTraceSpv);
-    const char* name = key.kernel == Kernel::Hits ? "hits" : f64 ? "trace (float64)" : "trace";
-    it = trace_.emplace(key, build(code, key.spec, name)).first;
-    buildMs += it->second->creationMs();
+std::unique_ptr<vulkan::ComputePipeline>& KernelLibrary::traceSlot(const PipelineKey& key, const char* role,
+                                                                   std::vector<Job>& jobs) {
+  std::unique_ptr<vulkan::ComputePipeline>& slot = trace_[key];
+  if (slot || queued(jobs, slot)) return slot;
+  bool f64 = key.precision == Precision::Float64;
+  if (f64 && !context_.float64Enabled()) {
+    throw InputError("render.precision", "float64 needs shaderFloat64, which " + context_.info().name + " lacks");
   }
-  return *it->second;
+  if (f64 && key.kernel == Kernel::Hits) throw InputError("render.precision", "the ray-query kernel is float32 only");
+  std::span<const std::uint32_t> code = key.kernel == Kernel::Hits ? std::span<const std::uint32_t>(kHitsSpv)
+                                        : f64                      ? std::span<const std::uint32_t>(kTrace64Spv)
+                                                                   : std::span<const std::uint32_t>(kTraceSpv);
+  std::string name = std::string(key.kernel == Kernel::Hits ? "hits" : "trace") + role + (f64 ? " (float64)" : "");
+  jobs.push_back(Job{&slot, code, key.spec, name, key.folding});
+  return slot;
 }
 
-const vulkan::ComputePipeline& KernelLibrary::fill(bool countStats, double& buildMs) {
-  std::unique_ptr<vulkan::ComputePipeline>& p = fill_[countStats ? 1 : 0];
-  if (!p) {
+std::unique_ptr<vulkan::ComputePipeline>& KernelLibrary::fillSlot(bool countStats, std::vector<Job>& jobs) {
+  std::unique_ptr<vulkan::ComputePipeline>& slot = fill_[countStats ? 1 : 0];
+  if (!slot && !queued(jobs, slot)) {
     vulkan::Specialization spec;
     spec.set(gpu::kSpecCountStats, countStats);
-    p = build(kFillSpv, spec, "fill");
-    buildMs += p->creationMs();
+    jobs.push_back(Job{&slot, kFillSpv, spec, countStats ? "fill" : "fill (quiet)"});
   }
-  return *p;
+  return slot;
 }
 
-const vulkan::ComputePipeline& KernelLibrary::entry(double& buildMs) {
-  if (!entry_) {
-    entry_ = build(kEntrySpv, vulkan::Specialization(), "entry points");
-    buildMs += entry_->creationMs();
-  }
-  return *entry_;
-}
-
-std::unique_ptr<vulkan::ComputePipeline> KernelLibrary::build(std::span<const std::uint32_t> code,
-                                                              const vulkan::Specialization& spec, const char* name) {
-  auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, code, layout_, spec,
-                                                            cache_ ? &cache_->cache() : nullptr, name);
-  if (cache_) cache_->save();
-  return pipeline;
+std::unique_ptr<vulkan::ComputePipeline>& KernelLibrary::entrySlot(std::vector<Job>& jobs) {
+  if (!entry_ && !queued(jobs, entry_))
+    jobs.push_back(Job{&entry_, kEntrySpv, vulkan::Specialization(), "entry points"});
+  return entry_;
 }
 
 } // namespace vkray

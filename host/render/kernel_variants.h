@@ -8,7 +8,9 @@
 #include <map>
 #include <memory>
 #include <optional>
+#include <string>
 #include <tuple>
+#include <vector>
 
 #include "render/gpu_scene.h"
 #include "render/render_options.h"
@@ -31,11 +33,12 @@ struct PipelineKey {
   Kernel kernel = Kernel::Shade;
   Precision precision = Precision::Float32;
   vulkan::Specialization spec;
+  vulkan::SpecializationFolding folding = vulkan::SpecializationFolding::FoldSpirv;
   bool operator<(const PipelineKey& o) const {
-    return std::tie(kernel, precision, spec) < std::tie(o.kernel, o.precision, o.spec);
+    return std::tie(kernel, precision, spec, folding) < std::tie(o.kernel, o.precision, o.spec, o.folding);
   }
   bool operator==(const PipelineKey& o) const {
-    return kernel == o.kernel && precision == o.precision && spec == o.spec;
+    return kernel == o.kernel && precision == o.precision && spec == o.spec && folding == o.folding;
   }
 };
 
@@ -66,7 +69,9 @@ struct KernelSet {
   const vulkan::ComputePipeline* fill = nullptr;      // sample's fill for culled rows
   const vulkan::ComputePipeline* quietFill = nullptr; // quietSample's
   const vulkan::ComputePipeline* entry = nullptr;
-  double buildMs = 0.0; // creation time of the pipelines built for this set (0: all reused)
+  double buildMs = 0.0; // wall time building this set's new pipelines, side by side (0: all reused)
+  // Each pipeline built for this set, with its own creation time, in plan order.
+  std::vector<PipelineBuild> built;
 };
 
 class KernelLibrary {
@@ -74,15 +79,23 @@ public:
   // cache may be null (no on-disk pipeline cache).
   KernelLibrary(const vulkan::Context& context, vk::PipelineLayout layout, vulkan::PipelineCache* cache);
 
-  // The plan's pipelines, building the ones this process has not built yet.
+  // The plan's pipelines, building the ones this process has not built yet, each on its own
+  // thread: a driver that compiles on the CPU (lavapipe) compiles one pipeline on one core.
   KernelSet realize(const KernelPlan& plan);
 
 private:
-  const vulkan::ComputePipeline& trace(const PipelineKey& key, double& buildMs);
-  const vulkan::ComputePipeline& fill(bool countStats, double& buildMs);
-  const vulkan::ComputePipeline& entry(double& buildMs);
-  std::unique_ptr<vulkan::ComputePipeline> build(std::span<const std::uint32_t> code,
-                                                 const vulkan::Specialization& spec, const char* name);
+  // A pipeline to build: its slot in the library, its SPIR-V, specialization and name.
+  struct Job {
+    std::unique_ptr<vulkan::ComputePipeline>* slot;
+    std::span<const std::uint32_t> code;
+    vulkan::Specialization spec;
+    std::string name;
+    vulkan::SpecializationFolding folding = vulkan::SpecializationFolding::FoldSpirv;
+  };
+  // Each returns the pipeline's slot, queueing a job when it is neither built nor queued.
+  std::unique_ptr<vulkan::ComputePipeline>& traceSlot(const PipelineKey& key, const char* role, std::vector<Job>& jobs);
+  std::unique_ptr<vulkan::ComputePipeline>& fillSlot(bool countStats, std::vector<Job>& jobs);
+  std::unique_ptr<vulkan::ComputePipeline>& entrySlot(std::vector<Job>& jobs);
 
   const vulkan::Context& context_;
   vk::PipelineLayout layout_;

@@ -5,6 +5,7 @@
 #include <atomic>
 #include <cstdint>
 #include <functional>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -40,6 +41,10 @@ enum class Kernel { Shade, Hits };
 struct RenderOptions {
   Kernel kernel = Kernel::Shade;
   bool specialize = true; // false: every feature compiled in (--no-specialize)
+  // Fold the specialization into the trace kernel's SPIR-V before the driver compiles it
+  // (vk/spirv_fold.h): the same code, compiled in a fraction of the time on a CPU driver. Off
+  // (--no-spirv-folding): the driver gets the whole module and the constants, for comparison.
+  bool foldSpirv = true;
   SceneMemory sceneMemory = SceneMemory::Auto;
   bool progressive = false;    // samples from the per-pixel sequence even at 1 spp (viewer frames)
   bool countStats = true;      // ray counters (a specialization; off costs nothing)
@@ -58,8 +63,18 @@ struct RenderOptions {
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };
 
+// One pipeline built for a render: what creating it took, the SPIR-V folding included.
+struct PipelineBuild {
+  std::string name;
+  double ms = 0.0;
+  double foldMs = 0.0;        // folding the specialization into the SPIR-V (0: not folded)
+  std::size_t spirvBytes = 0; // the module the driver compiled
+};
+
 struct RenderTimings {
-  double pipelineMs = 0.0;  // pipeline creation (0 when reused within the process)
+  double pipelineMs = 0.0; // pipeline creation, wall time (0 when reused within the process)
+  // Each pipeline built, with its own creation time (they build side by side).
+  std::vector<PipelineBuild> pipelinesBuilt;
   double traceMs = 0.0;     // GPU time of the trace dispatches (timestamp queries)
   double traceWallMs = 0.0; // host wall time of the trace submissions
   double readbackMs = 0.0;

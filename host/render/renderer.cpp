@@ -122,6 +122,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
   result.features = current_;
   result.timings.pipelineMs = kernels_.buildMs;
   result.timings.pipelineReused = kernels_.buildMs == 0.0;
+  result.timings.pipelinesBuilt = kernels_.built;
 
   const bool hitsKernel = options.kernel == Kernel::Hits;
   if (hitsKernel)

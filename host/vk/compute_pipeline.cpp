@@ -11,13 +11,28 @@
 #include <unistd.h>
 
 #include "vk/context.h"
+#include "vk/spirv_fold.h"
 
 namespace vkray::vulkan {
 
 ComputePipeline::ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv,
                                  vk::PipelineLayout layout, const Specialization& specialization,
-                                 const vk::raii::PipelineCache* cache, const std::string& name) {
+                                 const vk::raii::PipelineCache* cache, const std::string& name,
+                                 SpecializationFolding folding) {
   auto start = std::chrono::steady_clock::now();
+  FoldedSpirv folded;
+  if (folding == SpecializationFolding::FoldSpirv) {
+    folded = foldSpecialization(spirv, specialization);
+    if (folded.code.empty()) {
+      // Never fatal: the driver specializes the original module the same way, only slower.
+      std::fprintf(stderr, "vkray: warning: pipeline '%s' handed to the driver unfolded: %s\n", name.c_str(),
+                   folded.error.c_str());
+    } else {
+      spirv = folded.code;
+    }
+    foldMs_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  }
+  spirvBytes_ = spirv.size_bytes();
   std::vector<vk::SpecializationMapEntry> entries;
   std::vector<std::uint32_t> data;
   for (const auto& [id, value] : specialization.values()) {

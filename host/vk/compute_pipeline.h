@@ -28,17 +28,26 @@ private:
   std::map<std::uint32_t, std::uint32_t> values_;
 };
 
+// How specialization reaches the driver: as specialization constants alone, or also folded into
+// the SPIR-V first (vk/spirv_fold.h), which spares a CPU driver compiling switched-off code.
+enum class SpecializationFolding { DriverOnly, FoldSpirv };
+
 class ComputePipeline {
 public:
   // cache may be null.
   ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv, vk::PipelineLayout layout,
-                  const Specialization& specialization, const vk::raii::PipelineCache* cache, const std::string& name);
+                  const Specialization& specialization, const vk::raii::PipelineCache* cache, const std::string& name,
+                  SpecializationFolding folding = SpecializationFolding::DriverOnly);
   vk::Pipeline handle() const { return *pipeline_; }
-  double creationMs() const { return creationMs_; }
+  double creationMs() const { return creationMs_; } // folding included
+  double foldMs() const { return foldMs_; }
+  std::size_t spirvBytes() const { return spirvBytes_; } // what the driver was given
 
 private:
   vk::raii::Pipeline pipeline_{nullptr};
   double creationMs_ = 0.0;
+  double foldMs_ = 0.0;
+  std::size_t spirvBytes_ = 0;
 };
 
 // A VkPipelineCache loaded from and saved back to a file keyed by the device and driver.
