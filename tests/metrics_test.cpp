@@ -1,4 +1,5 @@
 // Error metrics on synthetic images with known answers, and image file round trips.
+#include <bit>
 #include <cmath>
 #include <filesystem>
 #include <limits>
@@ -65,6 +66,37 @@ TEST(ImageIo, SrgbEncodingIsTheStandardCurve) {
   EXPECT_EQ(encodeSrgb8(0.5f), 188); // 1.055 * 0.5^(1/2.4) - 0.055 = 0.7354
   EXPECT_EQ(encodeSrgb8(0.002f), 7); // linear segment: 12.92 * 0.002 * 255 = 6.6
   EXPECT_EQ(encodeSrgb8(std::numeric_limits<float>::quiet_NaN()), 0);
+}
+
+// encodeSrgb8 reads its bytes off a table of the formula's thresholds: it must give the formula's
+// bytes for every float, which holds if the formula is monotone. Checked where it could break,
+// 2048 floats on either side of every threshold, and across [0, 1] in steps of 61 floats
+// (17 million values), plus infinities and values above 1.
+TEST(ImageIo, SrgbTableGivesTheFormulasBytes) {
+  const std::uint32_t one = std::bit_cast<std::uint32_t>(1.0f);
+  std::uint32_t mismatches = 0;
+  auto check = [&](std::uint32_t bits) {
+    float x = std::bit_cast<float>(bits);
+    if (encodeSrgb8(x) != encodeSrgb8Formula(x) && ++mismatches < 5) {
+      ADD_FAILURE() << "x = " << x << ": table " << int(encodeSrgb8(x)) << ", formula " << int(encodeSrgb8Formula(x));
+    }
+  };
+  for (std::uint32_t b = 0; b <= one; b += 61) check(b);
+  std::uint32_t lo = 0;
+  for (int k = 1; k < 256; ++k) {
+    // The first float of byte k: where the formula steps from k - 1.
+    std::uint32_t a = lo, z = one;
+    while (z - a > 1) {
+      std::uint32_t mid = a + (z - a) / 2;
+      (encodeSrgb8Formula(std::bit_cast<float>(mid)) >= k ? z : a) = mid;
+    }
+    for (std::uint32_t b = z > 2048 ? z - 2048 : 0; b <= std::min(one, z + 2048); ++b) check(b);
+    lo = z;
+  }
+  EXPECT_EQ(mismatches, 0u);
+  EXPECT_EQ(encodeSrgb8(std::numeric_limits<float>::infinity()), 255);
+  EXPECT_EQ(encodeSrgb8(-std::numeric_limits<float>::infinity()), 0);
+  EXPECT_EQ(encodeSrgb8(std::nextafter(1.0f, 2.0f)), 255);
 }
 
 TEST(ImageIo, PfmAndPngRoundTrip) {

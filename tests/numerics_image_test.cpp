@@ -287,7 +287,9 @@ TEST(NumericsImage, TrianglesAtTheEdgeOfFloatHaveNoCracksAndNoSelfShadow) {
     EXPECT_EQ(cracks[0], 0) << c.name;
     EXPECT_EQ(shadowed[0], 0) << c.name;
     // The check can fail: the textbook hit point o + t d of a triangle 1e-6 across shadows its own face.
-    if (c.radius < 1e-3) EXPECT_GT(shadowed[1], 0) << "naive numerics were expected to self-shadow " << c.name;
+    if (c.radius < 1e-3) {
+      EXPECT_GT(shadowed[1], 0) << "naive numerics were expected to self-shadow " << c.name;
+    }
   }
 }
 

@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cerrno>
+#include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -15,9 +16,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#define STB_IMAGE_WRITE_IMPLEMENTATION
-#define STB_IMAGE_WRITE_STATIC
-#include <stb/stb_image_write.h>
+#include <png.h>
 
 #include "image/decode.h"
 #include "util/error.h"
@@ -47,20 +46,56 @@ void checkOutputPath(const fs::path& path) {
   }
 }
 
+namespace {
+
+// libpng's errors end in a longjmp back into encodeRgbPng; nothing between holds a destructor.
+[[noreturn]] void pngError(png_structp png, png_const_charp) {
+  std::longjmp(png_jmpbuf(png), 1);
+}
+void pngWarning(png_structp, png_const_charp) {}
+
+void pngAppend(png_structp png, png_bytep data, png_size_t size) {
+  auto* out = static_cast<std::vector<std::uint8_t>*>(png_get_io_ptr(png));
+  out->insert(out->end(), data, data + size);
+}
+
+// 8-bit RGB rows to PNG with libpng: zlib level 1 and the Sub filter on every row. Measured on
+// the bundled scenes at 800x600 (docs/performance.md, "Writing the image"), that is 5x faster
+// than stb_image_write's default (level 8, the best of five filters per row) and the files come
+// out smaller too (the showcase 152 KB against 161 KB): a rendered image's rows are smooth runs
+// that Sub turns into near-zero bytes a fast deflate already packs well.
+bool encodeRgbPng(const std::uint8_t* rgb, std::uint32_t width, std::uint32_t height, std::vector<std::uint8_t>& out) {
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, pngError, pngWarning);
+  if (!png) return false;
+  png_infop info = png_create_info_struct(png);
+  if (!info || setjmp(png_jmpbuf(png))) {
+    png_destroy_write_struct(&png, &info);
+    return false;
+  }
+  png_set_write_fn(png, &out, pngAppend, nullptr);
+  png_set_IHDR(png, info, width, height, 8, PNG_COLOR_TYPE_RGB, PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT,
+               PNG_FILTER_TYPE_DEFAULT);
+  png_set_sRGB(png, info, PNG_sRGB_INTENT_PERCEPTUAL);
+  png_set_compression_level(png, 1);
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
+  png_write_info(png, info);
+  for (std::uint32_t y = 0; y < height; ++y) {
+    png_write_row(png, const_cast<png_bytep>(rgb + static_cast<std::size_t>(y) * width * 3));
+  }
+  png_write_end(png, nullptr);
+  png_destroy_write_struct(&png, &info);
+  return true;
+}
+
+} // namespace
+
 std::vector<std::uint8_t> encodePng(const Image& image) {
   std::vector<std::uint8_t> rgb(static_cast<std::size_t>(image.width) * image.height * 3);
   for (std::size_t i = 0; i < image.pixels.size(); ++i) {
     for (int c = 0; c < 3; ++c) rgb[i * 3 + static_cast<std::size_t>(c)] = encodeSrgb8(image.pixels[i][c]);
   }
   std::vector<std::uint8_t> out;
-  auto sink = [](void* ctx, void* data, int size) {
-    auto* v = static_cast<std::vector<std::uint8_t>*>(ctx);
-    auto* bytes = static_cast<std::uint8_t*>(data);
-    v->insert(v->end(), bytes, bytes + size);
-  };
-  int ok = stbi_write_png_to_func(sink, &out, static_cast<int>(image.width), static_cast<int>(image.height), 3,
-                                  rgb.data(), static_cast<int>(image.width * 3));
-  if (!ok) throw Error("PNG encoding failed");
+  if (!encodeRgbPng(rgb.data(), image.width, image.height, out)) throw Error("PNG encoding failed");
   return out;
 }
 
