@@ -78,7 +78,11 @@ Buffer::Buffer(const Context& context, vk::DeviceSize size, vk::BufferUsageFlags
     std::optional<std::uint32_t> type;
     switch (use) {
     case MemoryUse::DeviceLocal:
-      type = findMemoryType(props, typeBits, MP::eDeviceLocal | MP::eHostVisible | MP::eHostCoherent);
+      // Mapped only where device memory is the host's own, cached (lavapipe, integrated GPUs). On a
+      // discrete GPU a device-local, host-visible type is the PCIe BAR: a heap often of 256 MiB, and
+      // uncached for the CPU, so a band read back through it crawls; there the staging copies are
+      // the fast path.
+      type = findMemoryType(props, typeBits, MP::eDeviceLocal | MP::eHostVisible | MP::eHostCoherent | MP::eHostCached);
       if (!type) type = findMemoryType(props, typeBits, MP::eDeviceLocal);
       break;
     case MemoryUse::Upload:
@@ -185,6 +189,9 @@ void Buffer::read(void* out, vk::DeviceSize bytes, vk::DeviceSize offset) const 
   Buffer staging(*context_, bytes, vk::BufferUsageFlagBits::eTransferDst, MemoryUse::Readback, name_ + " (readback)");
   context_->submitAndWait("reading back '" + name_ + "'", [&](const vk::raii::CommandBuffer& cmd) {
     cmd.copyBuffer(*buffer_, staging.handle(), vk::BufferCopy(offset, 0, bytes));
+    // A fence makes the copy's writes available to the device only; the host needs this barrier.
+    vk::MemoryBarrier toHost(vk::AccessFlagBits::eTransferWrite, vk::AccessFlagBits::eHostRead);
+    cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {}, toHost, {}, {});
   });
   staging.read(out, bytes);
 }
