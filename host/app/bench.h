@@ -23,7 +23,8 @@ struct TimedRender {
   double medianMs = 0.0; // GPU trace time (timestamps), median of the timed runs
   double minMs = 0.0;
   double maxMs = 0.0;
-  RayStats stats; // from one extra run with counters on
+  double compileMs = 0.0; // creating the timed runs' trace pipeline (0: it was built before)
+  RayStats stats;         // from one extra run with counters on
   Image image;
 };
 

@@ -38,6 +38,9 @@ void addKernelFlags(CLI::App& app, KernelFlags& f) {
   app.add_flag("--no-spirv-folding", f.noSpirvFolding,
                "give the driver the whole kernel and its specialization constants instead of folding them into the "
                "SPIR-V first (the same code, compiled slower; for comparison)");
+  app.add_flag("--no-unroll", f.noUnroll,
+               "keep the sizes of small scene arrays run-time values instead of baking them in (no unrolled "
+               "loops; for comparison)");
   app.add_flag("--no-row-culling", f.noRowCulling,
                "trace rows whose eye rays provably miss everything instead of filling them (for comparison)");
   app.add_flag("--no-entry-points", f.noEntryPoints,
@@ -50,6 +53,7 @@ void addKernelFlags(CLI::App& app, KernelFlags& f) {
 void applyKernelFlags(const KernelFlags& f, RenderOptions& o) {
   o.specialize = !f.noSpecialize;
   o.foldSpirv = !f.noSpirvFolding;
+  o.unroll = !f.noUnroll;
   o.cullRows = !f.noRowCulling;
   o.entryPoints = !f.noEntryPoints;
   o.sceneMemory = *parseEnum<SceneMemory>(f.sceneMemory);

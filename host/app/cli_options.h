@@ -36,6 +36,7 @@ CLI::Validator realRange(double lo, double hi);
 struct KernelFlags {
   bool noSpecialize = false;        // --no-specialize
   bool noSpirvFolding = false;      // --no-spirv-folding
+  bool noUnroll = false;            // --no-unroll
   bool noRowCulling = false;        // --no-row-culling
   bool noEntryPoints = false;       // --no-entry-points
   std::string sceneMemory = "auto"; // --scene-memory, a SceneMemory name

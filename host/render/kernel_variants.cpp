@@ -63,7 +63,7 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
   // pipeline keeps every count a runtime value.
   auto count = [&](std::size_t n) {
-    return (all || n > gpu::kMaxUnrolledCount) ? gpu::kRuntimeCount : static_cast<std::uint32_t>(n);
+    return (all || !o.unroll || n > gpu::kMaxUnrolledCount) ? gpu::kRuntimeCount : static_cast<std::uint32_t>(n);
   };
   spec.set(gpu::kSpecSphereCount, f.useBvh ? gpu::kRuntimeCount : count(shape.spheres));
   spec.set(gpu::kSpecTriangleCount, f.useBvh ? gpu::kRuntimeCount : count(shape.triangles));

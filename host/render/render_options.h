@@ -45,6 +45,9 @@ struct RenderOptions {
   // (vk/spirv_fold.h): the same code, compiled in a fraction of the time on a CPU driver. Off
   // (--no-spirv-folding): the driver gets the whole module and the constants, for comparison.
   bool foldSpirv = true;
+  // Bake the sizes of small scene arrays into the pipeline so the driver unrolls their loops
+  // (gpu_types.h, kMaxUnrolledCount). Off (--no-unroll): run-time counts, for comparison.
+  bool unroll = true;
   SceneMemory sceneMemory = SceneMemory::Auto;
   bool progressive = false;    // samples from the per-pixel sequence even at 1 spp (viewer frames)
   bool countStats = true;      // ray counters (a specialization; off costs nothing)
