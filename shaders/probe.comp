@@ -62,7 +62,8 @@ void main() {
       r.hit.yzw = bary;
     }
   } else if (op == kProbePolygon) {
-    t = robust ? intersectPolygonRobust(ray, watertightSetup(ray.dir), q.a.xyz, q.op.z, q.op.w, tMax)
+    // No bound radius here: the probe tests the inside test itself (an infinite reach never rejects).
+    t = robust ? intersectPolygonRobust(ray, watertightSetup(ray.dir), q.a.xyz, q.op.z, q.op.w, kInfinity, tMax)
                : intersectPolygonNaive(ray, q.a.xyz, q.op.z, q.op.w, tMax);
     if (t > 0.0) {
       polygonSurface(ray, t, vertices[q.op.z].xyz, p, err);

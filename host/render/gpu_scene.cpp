@@ -226,9 +226,17 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     auto first = static_cast<std::uint32_t>(g.polyVertices.size());
     for (const auto& v : poly.vertices) g.polyVertices.emplace_back(rel(v, origin), 0.0f);
     double d = -glm::dot(poly.normal, poly.vertices[0] - origin);
-    g.polygons.push_back(
-        gpu::Polygon{glm::vec4(glm::vec3(poly.normal), static_cast<float>(d)),
-                     glm::uvec4(first, static_cast<std::uint32_t>(poly.vertices.size()), poly.material, 0)});
+    gpu::Polygon gp{glm::vec4(glm::vec3(poly.normal), static_cast<float>(d)),
+                    glm::uvec4(first, static_cast<std::uint32_t>(poly.vertices.size()), poly.material, 0)};
+    // The bounding sphere about the first vertex, over the float vertices the kernel reads, in
+    // double and rounded up: the kernel's cheap reject must never drop a hit.
+    glm::dvec3 v0(glm::vec3(g.polyVertices[first]));
+    double radius = 0.0;
+    for (std::size_t i = first; i < g.polyVertices.size(); ++i) {
+      radius = std::max(radius, glm::length(glm::dvec3(glm::vec3(g.polyVertices[i])) - v0));
+    }
+    gpu::setPolygonBoundRadius(gp, std::nextafter(static_cast<float>(radius), std::numeric_limits<float>::infinity()));
+    g.polygons.push_back(gp);
   }
   for (const Triangle& t : scene.triangles) {
     std::uint32_t normalBase = gpu::kNoNormals;

@@ -20,8 +20,8 @@ float triangleDistance(TraceRay r, vec3 v0, vec3 v1, vec3 v2, float tMax, out ve
 }
 
 // The inside test as in float (edge functions are exact for the sign that matters), t in double.
-float polygonDistance(TraceRay r, vec3 normal, uint first, uint count, float tMax) {
-  float tf = intersectPolygonRobust(r.ray, r.w, normal, first, count, tMax);
+float polygonDistance(TraceRay r, vec3 normal, uint first, uint count, float boundRadius, float tMax) {
+  float tf = intersectPolygonRobust(r.ray, r.w, normal, first, count, boundRadius, tMax);
   if (tf < 0.0) return -1.0;
   dvec3 n = dvec3(normal);
   double td = dot(n, dvec3(loadPolyVertex(first)) - dvec3(r.ray.origin)) / dot(n, dvec3(r.ray.dir));
@@ -56,8 +56,8 @@ float triangleDistance(TraceRay r, vec3 v0, vec3 v1, vec3 v2, float tMax, out ve
                 : intersectTriangleNaive(r.ray, v0, v1, v2, tMax, bary);
 }
 
-float polygonDistance(TraceRay r, vec3 normal, uint first, uint count, float tMax) {
-  return ROBUST ? intersectPolygonRobust(r.ray, r.w, normal, first, count, tMax)
+float polygonDistance(TraceRay r, vec3 normal, uint first, uint count, float boundRadius, float tMax) {
+  return ROBUST ? intersectPolygonRobust(r.ray, r.w, normal, first, count, boundRadius, tMax)
                 : intersectPolygonNaive(r.ray, normal, first, count, tMax);
 }
 

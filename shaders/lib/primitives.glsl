@@ -19,7 +19,8 @@ float triangleT(TraceRay r, uint i, float tMax, out vec3 bary) {
 
 float polygonT(TraceRay r, uint i, float tMax) {
   Polygon poly = loadPolygon(i);
-  return polygonDistance(r, polygonNormal(poly), polygonFirstVertex(poly), polygonVertexCount(poly), tMax);
+  return polygonDistance(r, polygonNormal(poly), polygonFirstVertex(poly), polygonVertexCount(poly),
+                         polygonBoundRadius(poly), tMax);
 }
 
 float planeT(TraceRay r, uint i, float tMax) {

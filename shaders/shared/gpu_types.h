@@ -222,7 +222,7 @@ struct Triangle {
 
 struct Polygon {
   vec4 plane; // xyz: unit normal; w: D (n.x + D = 0)
-  uvec4 meta; // x: first vertex in PolyVertices[]; y: vertex count; z: material; w: unused
+  uvec4 meta; // x: first vertex in PolyVertices[]; y: vertex count; z: material; w: bound radius (float bits)
 };
 
 // A textured material's texture (Material.transmission.z): kTextureRefTexels RGBA32UI texels of
@@ -322,6 +322,8 @@ vec3 polygonNormal(Polygon q) { return q.plane.xyz; }
 uint polygonFirstVertex(Polygon q) { return q.meta.x; }
 uint polygonVertexCount(Polygon q) { return q.meta.y; }
 uint polygonMaterial(Polygon q) { return q.meta.z; }
+// Every vertex lies within this distance of the first one (a bounding sphere about it, rounded up).
+float polygonBoundRadius(Polygon q) { return uintBitsToFloat(q.meta.w); }
 
 uint textureFirstLevel(TextureRef t) { return t.levels.x; } // index of a TextureLevel in TextureInfo[]
 uint textureLevelCount(TextureRef t) { return t.levels.y; }
@@ -365,6 +367,8 @@ inline void setTriangleNormalBase(Triangle& t, uint first) { t.v1.w = std::bit_c
 inline void setTriangleUvBasePlusOne(Triangle& t, uint firstPlusOne) { t.v2.w = std::bit_cast<float>(firstPlusOne); }
 inline uint polygonFirstVertex(const Polygon& q) { return q.meta.x; }
 inline uint polygonVertexCount(const Polygon& q) { return q.meta.y; }
+inline float polygonBoundRadius(const Polygon& q) { return std::bit_cast<float>(q.meta.w); }
+inline void setPolygonBoundRadius(Polygon& q, float r) { q.meta.w = std::bit_cast<uint>(r); }
 inline bool hasVertexColors(const UvInfo& i) { return i.lodAndFlags.z != 0.0f; }
 // clang-format on
 #endif
