@@ -148,8 +148,8 @@ VKRAY_CONST(uint, kMinLevelsNearest, 1u);      // the level nearest the lod
 VKRAY_CONST(uint, kMinLevelsBase, 2u);         // level 0 alone
 
 // ---- Limits shared by host validation and shader arrays ------------------------------------------
-VKRAY_CONST(uint, kMaxStackSize, 16u);      // deepest explicit stack compiled into a pipeline
-VKRAY_CONST(uint, kMaxMediaDepth, 4u);      // nested transmissive media tracked per ray
+VKRAY_CONST(uint, kMaxStackSize, 16u); // deepest explicit stack compiled into a pipeline
+VKRAY_CONST(uint, kMaxMediaDepth, 4u); // nested transmissive media tracked per ray
 // Rays one sample's Whitted tree may trace (eye ray, reflections, refractions; shadow rays apart).
 // Only glass trees grow past max_depth + 1; the one of a 16-deep reference with bailout 1e-6 stays
 // under it, a bailout-0 tree at depth 16 (2^17 rays) does not and is counted as truncated.
