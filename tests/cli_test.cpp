@@ -11,6 +11,14 @@
 
 #include <gtest/gtest.h>
 
+#include <Imath/half.h>
+#include <OpenEXR/ImfChannelList.h>
+#include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfInputFile.h>
+
+#include "image/exr_io.h"
+#include "image/image_io.h"
+
 #include "test_support.h"
 
 namespace vkray::test {
@@ -94,6 +102,40 @@ TEST_F(Cli, WritesLinearPfm) {
   std::string data = slurp(out);
   EXPECT_EQ(data.rfind("PF\n16 8\n-1.0\n", 0), 0u);
   EXPECT_EQ(data.size(), std::string("PF\n16 8\n-1.0\n").size() + 16 * 8 * 12);
+}
+
+// An EXR holds the render's linear values: read back with OpenEXR, its R, G and B channels (named
+// so in the file) equal the PFM's bit for bit; with --exr-half each is the value rounded to half.
+TEST_F(Cli, WritesExrWithTheSameValuesAsThePfm) {
+  fs::path pfm = dir_ / "a.pfm", exr = dir_ / "a.exr", half = dir_ / "h.exr";
+  const std::string common = " --width 40 --height 30 -q";
+  ASSERT_EQ(vkray("render '" + scene("glass.json") + "' -o '" + pfm.string() + "'" + common).exitCode, 0);
+  RunResult r = vkray("render '" + scene("glass.json") + "' -o '" + exr.string() + "'" + common);
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  ASSERT_EQ(vkray("render '" + scene("glass.json") + "' -o '" + half.string() + "' --exr-half" + common).exitCode, 0);
+  Imf::InputFile file(exr.c_str());
+  std::vector<std::string> names;
+  for (auto it = file.header().channels().begin(); it != file.header().channels().end(); ++it) {
+    names.push_back(it.name());
+    EXPECT_EQ(it.channel().type, Imf::FLOAT) << it.name();
+  }
+  EXPECT_EQ(names, (std::vector<std::string>{"B", "G", "R"})); // OpenEXR lists channels by name
+  Image linear = readImage(pfm);
+  Image fromExr = readExr(exr);
+  EXPECT_EQ(fromExr.pixels, linear.pixels);
+  Imf::InputFile halfFile(half.c_str());
+  EXPECT_EQ(halfFile.header().channels().findChannel("R")->type, Imf::HALF);
+  Image fromHalf = readExr(half);
+  ASSERT_EQ(fromHalf.pixels.size(), linear.pixels.size());
+  for (std::size_t i = 0; i < linear.pixels.size(); ++i) {
+    for (int c = 0; c < 3; ++c) EXPECT_EQ(fromHalf.pixels[i][c], float(Imath::half(linear.pixels[i][c])));
+  }
+  // --exr-half with another format is refused before any work, and nothing is written.
+  fs::path png = dir_ / "b.png";
+  r = vkray("render '" + scene("glass.json") + "' -o '" + png.string() + "' --exr-half" + common);
+  EXPECT_EQ(r.exitCode, 1);
+  EXPECT_EQ(r.err, "vkray: error: --exr-half: the output '" + png.string() + "' is not an .exr file\n");
+  EXPECT_FALSE(fs::exists(png));
 }
 
 TEST_F(Cli, BrokenSceneFailsWithOneLineAndWritesNothing) {

@@ -25,10 +25,12 @@ struct RenderArgs {
   std::optional<int> frame; // --frame N
   std::string frames;       // --frames A-B
   std::string tile;         // --tile I/N
+  bool exrHalf = false;     // --exr-half
 };
 
 struct MergeArgs {
   std::filesystem::path output;
+  bool exrHalf = false; // --exr-half
   std::vector<std::filesystem::path> tiles;
 };
 

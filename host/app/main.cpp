@@ -63,10 +63,13 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
 
   RenderArgs render;
-  auto* renderCmd = app.add_subcommand("render", "render a scene to an image file (.png or .pfm)");
+  auto* renderCmd = app.add_subcommand("render", "render a scene to an image file (.png, .pfm or .exr)");
   renderCmd->add_option("scene", render.scene, "scene file (JSON) or model file (.obj, .gltf, .glb, .ply)")->required();
-  renderCmd->add_option("-o,--output", render.output, "output image: .png (sRGB 8-bit) or .pfm (linear float)")
+  renderCmd
+      ->add_option("-o,--output", render.output,
+                   "output image: .png (sRGB 8-bit), .pfm (linear float) or .exr (linear float; OpenEXR)")
       ->required();
+  renderCmd->add_flag("--exr-half", render.exrHalf, "write the .exr's channels as 16-bit half instead of 32-bit float");
   renderCmd->add_flag("--stats", render.stats, "print timings, ray counts and rays per second as 'name: value' lines");
   renderCmd->add_flag("--explain", render.explain, "say which effects the scene calls for and what is compiled out");
   renderCmd->add_flag("-q,--quiet", render.quiet, "no progress bar");
@@ -86,7 +89,8 @@ int main(int argc, char** argv) {
 
   MergeArgs merge;
   auto* mergeCmd = app.add_subcommand("merge", "join tiles from 'render --tile' into the whole image");
-  mergeCmd->add_option("-o,--output", merge.output, "output image: .png or .pfm")->required();
+  mergeCmd->add_option("-o,--output", merge.output, "output image: .png, .pfm or .exr")->required();
+  mergeCmd->add_flag("--exr-half", merge.exrHalf, "write the .exr's channels as 16-bit half instead of 32-bit float");
   mergeCmd->add_option("tiles", merge.tiles, "tile files (.pfm, each with its .tile.json)")->required();
 
   auto* benchCmd = app.add_subcommand("bench", "benchmarks that print figures and ratios");

@@ -164,6 +164,13 @@ std::optional<TileRequest> tileRequest(const RenderArgs& args, const RenderSetti
   return t;
 }
 
+// --exr-half says how an EXR stores its channels: with another format it is a mistake, not a no-op.
+void checkExrHalf(bool exrHalf, const std::filesystem::path& output) {
+  if (exrHalf && imageFormatFor(output) != ImageFormat::Exr) {
+    throw InputError("--exr-half", "the output '" + output.string() + "' is not an .exr file");
+  }
+}
+
 void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Context& context,
                 const vulkan::PipelineCache* cache, Renderer& renderer, const RenderResult& result, double loadMs,
                 double writeMs, Clock::time_point t0) {
@@ -248,6 +255,7 @@ int runRender(const RenderArgs& args) {
   double loadMs = msSince(t0);
   const FrameRange frames = frameRange(args, frameCount(scene));
   const std::optional<TileRequest> tile = tileRequest(args, scene.render);
+  checkExrHalf(args.exrHalf, args.output);
   // Every output checked, and a range given a pattern, before any time on the GPU.
   std::vector<std::filesystem::path> outputs;
   for (int f = frames.first; f <= frames.last; ++f) {
@@ -327,7 +335,7 @@ int runRender(const RenderArgs& args) {
       tileInfo.fingerprint = sceneFingerprint(frameScene, f);
       writeTile(output, result.image, tileInfo);
     } else {
-      writeImage(output, result.image);
+      writeImage(output, result.image, ImageWriteOptions{args.exrHalf});
     }
     double writeMs = msSince(tw);
     if (args.stats) {
@@ -340,7 +348,8 @@ int runRender(const RenderArgs& args) {
 
 int runMerge(const MergeArgs& args) {
   checkOutputPath(args.output);
-  writeImage(args.output, mergeTiles(args.tiles));
+  checkExrHalf(args.exrHalf, args.output);
+  writeImage(args.output, mergeTiles(args.tiles), ImageWriteOptions{args.exrHalf});
   return 0;
 }
 

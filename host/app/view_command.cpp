@@ -17,7 +17,7 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   cmd->add_option("--frames", a.frames, "scripted: trace this many frames, save --screenshot, exit")
       ->check(CLI::Range(1u, 1u << 20));
   cmd->add_option("--screenshot", a.screenshot,
-                  "screenshot file (.png or .pfm): written after --frames; otherwise where the P key saves");
+                  "screenshot file (.png, .pfm or .exr): written after --frames; otherwise where the P key saves");
   cmd->add_flag("--no-vsync", a.noVsync, "present without waiting for vertical blank (MAILBOX or IMMEDIATE)");
   cmd->add_option("--max-samples", a.maxSamples, "samples per pixel at which accumulation stops")
       ->check(CLI::Range(1u, 1u << 24));
@@ -36,7 +36,7 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   cmd->add_option("--spin", a.spin, "orbit the camera by this many degrees per frame (benchmarks)");
   cmd->add_option("--resize-to", a.resizeTo, "scripted: resize the window to WxH halfway through (tests)");
   cmd->add_option("--screenshot-window", a.windowScreenshot,
-                  "scripted: also save the window as shown, overlay included (.png or .pfm)");
+                  "scripted: also save the window as shown, overlay included (.png, .pfm or .exr)");
   addRenderFlags(*cmd, a.render);
   addKernelFlags(*cmd, a.kernel);
   addModelFlags(*cmd, a.model);

@@ -19,6 +19,7 @@
 #include <png.h>
 
 #include "image/decode.h"
+#include "image/exr_io.h"
 #include "util/error.h"
 
 namespace vkray {
@@ -31,7 +32,8 @@ ImageFormat imageFormatFor(const fs::path& path) {
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
   if (ext == ".png") return ImageFormat::Png;
   if (ext == ".pfm") return ImageFormat::Pfm;
-  throw InputError(path.string(), "unknown image format '" + ext + "' (use .png or .pfm)");
+  if (ext == ".exr") return ImageFormat::Exr;
+  throw InputError(path.string(), "unknown image format '" + ext + "' (use .png, .pfm or .exr)");
 }
 
 void checkOutputPath(const fs::path& path) {
@@ -181,8 +183,18 @@ void writeFileAtomic(const fs::path& path, const std::vector<std::uint8_t>& byte
   }
 }
 
-void writeImage(const fs::path& path, const Image& image) {
-  writeFileAtomic(path, imageFormatFor(path) == ImageFormat::Png ? encodePng(image) : encodePfm(image));
+void writeImage(const fs::path& path, const Image& image, const ImageWriteOptions& options) {
+  switch (imageFormatFor(path)) {
+  case ImageFormat::Png:
+    writeFileAtomic(path, encodePng(image));
+    break;
+  case ImageFormat::Pfm:
+    writeFileAtomic(path, encodePfm(image));
+    break;
+  case ImageFormat::Exr:
+    writeFileAtomic(path, encodeExr(image, options.exrHalf ? ExrPixels::Half : ExrPixels::Float));
+    break;
+  }
 }
 
 namespace {
@@ -224,6 +236,7 @@ Image readPfm(const fs::path& path) {
 
 Image readImage(const fs::path& path) {
   if (imageFormatFor(path) == ImageFormat::Pfm) return readPfm(path);
+  if (imageFormatFor(path) == ImageFormat::Exr) return readExr(path);
   std::ifstream in(path, std::ios::binary);
   std::error_code ec;
   if (!in || fs::is_directory(path, ec)) throw InputError(path.string(), "cannot read the image file");

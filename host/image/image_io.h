@@ -1,4 +1,5 @@
-// Image files: PNG (8-bit sRGB) and PFM (linear float), chosen by extension. Writes are atomic: a
+// Image files: PNG (8-bit sRGB), PFM (linear float) and OpenEXR (linear float or half; exr_io.h),
+// chosen by extension. Writes are atomic: a
 // temporary file in the target directory, renamed over the target only when complete.
 #pragma once
 
@@ -11,9 +12,9 @@
 
 namespace vkray {
 
-enum class ImageFormat { Png, Pfm };
+enum class ImageFormat { Png, Pfm, Exr };
 
-// Format for an output path, or InputError if the extension is not .png or .pfm.
+// Format for an output path, or InputError if the extension is not .png, .pfm or .exr.
 ImageFormat imageFormatFor(const std::filesystem::path& path);
 
 // Checks, before any work, that `path` can be written: known extension, existing writable
@@ -23,8 +24,12 @@ void checkOutputPath(const std::filesystem::path& path);
 std::vector<std::uint8_t> encodePng(const Image& image);
 std::vector<std::uint8_t> encodePfm(const Image& image);
 
-void writeImage(const std::filesystem::path& path, const Image& image);
-Image readImage(const std::filesystem::path& path); // PNG decoded to linear, or PFM
+struct ImageWriteOptions {
+  bool exrHalf = false; // EXR channels as 16-bit half instead of 32-bit float
+};
+
+void writeImage(const std::filesystem::path& path, const Image& image, const ImageWriteOptions& options = {});
+Image readImage(const std::filesystem::path& path); // PNG decoded to linear, PFM or EXR
 
 // Writes bytes to path atomically (temp file + fsync + rename). Throws InputError naming the path.
 void writeFileAtomic(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes);
