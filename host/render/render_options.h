@@ -62,6 +62,9 @@ struct RenderOptions {
   // image are black. A tile of the image, the same pixels as rendering it whole.
   std::uint32_t rowBegin = 0;
   std::uint32_t rowEnd = 0;
+  // Keep per-pixel statistics (RenderResult::pixels): samples, estimated error and rays traced, as
+  // the --aov layers `spp`, `error` and `rays` need. Renders progressively (host/render/adaptive.h).
+  bool pixelStats = false;
   std::function<void(const RenderProgress&)> progress;
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };
@@ -86,8 +89,17 @@ struct RenderTimings {
   bool pipelineReused = false;
 };
 
+// Per-pixel statistics of a progressive render, row-major, one value per pixel; empty otherwise.
+struct PixelStats {
+  std::vector<float> samples; // samples traced
+  std::vector<float> error;   // estimated standard error of the mean, the largest of R, G, B (linear)
+  std::vector<float> rays;    // rays traced for the pixel, all kinds (eye, shadow, reflection, refraction)
+  bool empty() const { return samples.empty(); }
+};
+
 struct RenderResult {
   Image image; // Kernel::Shade
+  PixelStats pixels; // RenderOptions::pixelStats, --noise-threshold, --time-limit
   // Kernel::Hits: per pixel, row-major, vec4(t or -1, hit kind, primitive index, shadow: -1 none
   // traced, 0 lit, 1 occluded).
   std::vector<glm::vec4> hits;
