@@ -21,6 +21,7 @@ layout(binding = kBindingPrevImage, rgba32f) uniform readonly restrict imageBuff
 layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 layout(constant_id = kSpecRefinePass) const bool REFINE_PASS = false;
+layout(constant_id = kSpecListPass) const bool LIST_PASS = false;
 
 const uint kRayEye = 0u;
 const uint kRayReflection = 1u;
@@ -262,9 +263,45 @@ void flushStats() {
   }
 }
 
+// A progressive pass (host/render/adaptive.h): invocation `entry` traces the pixel the host listed
+// at that entry of the pass input, (x, y) as floats; the list holds only the pixels still open, so
+// SIMD lanes stay full however few remain. Two texels per entry: (sum rgb, samples) and (sum of
+// squares rgb, rays traced), from which the host estimates each pixel's standard error.
+void listPass() {
+  uint entry = gl_WorkGroupID.x * (kWorkgroupSizeX * kWorkgroupSizeY) + gl_LocalInvocationIndex;
+  if (entry >= pc.tileSize.x) return;
+  uvec2 pixel = uvec2(imageLoad(prevTexels, int(entry)).xy);
+  uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
+  uint count = opaqueUniform(pc.sampleCount);
+  vec3 sum = vec3(0.0);
+  vec3 squares = vec3(0.0);
+  uint k = 0u;
+  while (true) { // tested at the bottom, as in sampleSum
+    vec3 radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)));
+    sum += radiance;
+    squares += radiance * radiance;
+    ++k;
+    if (k >= count) break;
+  }
+  uint rays = COUNT_STATS ? gCount.eyeRays + gCount.shadowRays + gCount.reflectionRays + gCount.refractionRays : 0u;
+  vec4 first = vec4(sum, float(count));
+  vec4 second = vec4(squares, float(rays));
+  if ((opaqueUniform(pc.flags) & kFlagAccumulate) != 0u) {
+    first += imageLoad(imageTexels, int(2u * entry));
+    second += imageLoad(imageTexels, int(2u * entry + 1u));
+  }
+  imageStore(imageTexels, int(2u * entry), first);
+  imageStore(imageTexels, int(2u * entry + 1u), second);
+}
+
 void main() {
   gDynamicZero = stats.zero;
   loadSceneRegisters(); // before any branch (scene_access.glsl)
+  if (LIST_PASS) {
+    listPass();
+    flushStats();
+    return;
+  }
   uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (camera.glsl)
   uvec2 pixel = pc.tileOrigin + local;
   // The dispatch is rounded up to whole workgroups: invocations past the tile or image do nothing,

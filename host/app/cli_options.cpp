@@ -23,6 +23,21 @@ CLI::Validator realRange(double lo, double hi) {
       "REAL in [" + text + "]");
 }
 
+// A real number in (0, hi]: zero, negative numbers and NaN are refused.
+CLI::Validator positiveReal(double hi) {
+  std::ostringstream bound;
+  bound << hi;
+  std::string text = bound.str();
+  return CLI::Validator(
+      [hi, text](std::string& input) -> std::string {
+        double v = 0.0;
+        if (!CLI::detail::lexical_cast(input, v)) return "Value " + input + " is not a number";
+        if (!(v > 0.0 && v <= hi)) return "Value " + input + " must be > 0 and at most " + text;
+        return {};
+      },
+      "REAL in (0, " + text + "]");
+}
+
 void addDeviceFlags(CLI::App& app, DeviceFlags& f) {
   app.add_option("--device", f.device, "Vulkan device: index or name substring (see 'vkray info')")
       ->envname("VKRAY_DEVICE");
@@ -71,6 +86,15 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(CLI::IsMember(enumNameList<Antialiasing>()));
   app.add_option("--adaptive-threshold", f.adaptiveThreshold, "adaptive AA: neighbour difference that triggers spp")
       ->check(realRange(0.0, 1.0));
+  app.add_option("--noise-threshold", f.noiseThreshold,
+                 "progressive: stop each pixel once its estimated standard error (linear RGB) is below this")
+      ->check(positiveReal(1e6));
+  app.add_option("--time-limit", f.timeLimit, "progressive: passes stop within this many seconds of GPU time")
+      ->check(positiveReal(kMaxTimeLimitSeconds));
+  app.add_option("--min-spp", f.minSpp, "progressive: samples every pixel gets first (default 16)")
+      ->check(CLI::Range(1ll, kMaxSpp));
+  app.add_option("--max-spp", f.maxSpp, "progressive: the most samples a pixel gets (default 1024)")
+      ->check(CLI::Range(1ll, kMaxSpp));
   app.add_option("--numerics", f.numerics, "intersection numerics: robust (default) or naive")
       ->check(CLI::IsMember(enumNameList<Numerics>()));
   app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")
@@ -93,6 +117,10 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
   if (f.maxDepth) s.maxDepth = *f.maxDepth;
   if (f.spp) s.spp = *f.spp;
   if (f.bailout) s.bailout = *f.bailout;
+  if (f.noiseThreshold) s.noiseThreshold = *f.noiseThreshold;
+  if (f.timeLimit) s.timeLimit = *f.timeLimit;
+  if (f.minSpp) s.minSpp = *f.minSpp;
+  if (f.maxSpp) s.maxSpp = *f.maxSpp;
   if (f.adaptiveThreshold) s.adaptiveThreshold = *f.adaptiveThreshold;
   if (f.antialiasing) s.antialiasing = *parseEnum<Antialiasing>(*f.antialiasing);
   if (f.numerics) s.numerics = *parseEnum<Numerics>(*f.numerics);

@@ -17,8 +17,8 @@ namespace vkray {
 
 struct RenderFlags {
   std::optional<std::uint32_t> width, height;
-  std::optional<int> maxDepth, spp;
-  std::optional<double> bailout, adaptiveThreshold;
+  std::optional<int> maxDepth, spp, minSpp, maxSpp;
+  std::optional<double> bailout, adaptiveThreshold, noiseThreshold, timeLimit;
   std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision, textureFilter;
 };
 
@@ -31,6 +31,7 @@ struct ModelFlags {
 // A check that a real number lies in [lo, hi], whose message prints the bounds as written
 // ("not in range 1 to 10000"; CLI::Range prints doubles with six decimals) and refuses NaN.
 CLI::Validator realRange(double lo, double hi);
+CLI::Validator positiveReal(double hi); // (0, hi], NaN refused
 
 // The renderer's own switches, for comparison runs: each maps onto a RenderOptions field.
 struct KernelFlags {

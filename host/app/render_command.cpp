@@ -179,7 +179,19 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   std::printf("scene: %s\n", args.scene.string().c_str());
   std::printf("device: %s (%s)\n", info.name.c_str(), info.driver.c_str());
   std::printf("image: %ux%u\n", scene.render.width, scene.render.height);
-  std::printf("spp: %d\n", scene.render.spp);
+  const ProgressiveSummary& prog = result.progressive;
+  if (prog.passes > 0) {
+    // Progressive: what the noise threshold or time limit reached (host/render/adaptive.h).
+    if (scene.render.noiseThreshold > 0.0) std::printf("noise threshold: %g\n", scene.render.noiseThreshold);
+    if (scene.render.timeLimit > 0.0) std::printf("time limit: %g s\n", scene.render.timeLimit);
+    std::printf("spp: mean %.1f, max %.0f (min %d, cap %d)\n", prog.sppMean, prog.sppMax, scene.render.minSpp,
+                scene.render.maxSpp);
+    std::printf("passes: %d\n", prog.passes);
+    std::printf("error estimate: mean %.3g, p95 %.3g\n", prog.errorMean, prog.errorP95);
+    if (scene.render.noiseThreshold > 0.0) std::printf("converged pixels: %.1f %%\n", 100.0 * prog.converged);
+  } else {
+    std::printf("spp: %d\n", scene.render.spp);
+  }
   std::printf("max depth: %d\n", scene.render.maxDepth);
   if (!args.explain) { // --explain printed the same lines above
     for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());

@@ -30,7 +30,7 @@ SceneShape shapeOf(const GpuScene& g) {
 
 vulkan::Specialization specializationFor(const Features& f, const RenderSettings& s, const RenderOptions& o,
                                          const SceneShape& shape, SceneMemoryUse memory, bool centerSample,
-                                         bool refinePass) {
+                                         bool refinePass, bool listPass) {
   vulkan::Specialization spec;
   bool all = !o.specialize;
   spec.set(gpu::kSpecHasSpheres, all || f.spheres);
@@ -39,7 +39,8 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecHasPolygons, all || f.polygons);
   const bool useBvh = f.useBvh && shape.hasBvh;
   spec.set(gpu::kSpecUseBvh, useBvh);
-  spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints);
+  // A list pass's lanes hold pixels from anywhere in the image: no tile to share entry points.
+  spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints && !listPass);
   spec.set(gpu::kSpecShadows, all || f.shadows);
   spec.set(gpu::kSpecReflection, all || f.reflection);
   spec.set(gpu::kSpecRefraction, all || f.refraction);
@@ -60,6 +61,7 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecShadingInUbo, memory.shading);
   spec.set(gpu::kSpecCenterSample, centerSample);
   spec.set(gpu::kSpecRefinePass, refinePass);
+  spec.set(gpu::kSpecListPass, listPass);
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
   // pipeline keeps every count a runtime value.
   auto count = [&](std::size_t n) {
@@ -81,11 +83,18 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
   const bool adaptive = s.antialiasing == Antialiasing::Adaptive && s.spp > 1;
   // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   const bool center = !o.progressive && (s.spp == 1 || adaptive);
-  auto key = [&](const RenderOptions& options, bool centerSample, bool refinePass) {
-    return PipelineKey{o.kernel, s.precision, specializationFor(f, s, options, shape, memory, centerSample, refinePass),
-                       o.foldSpirv ? vulkan::SpecializationFolding::FoldSpirv
-                                   : vulkan::SpecializationFolding::DriverOnly};
+  auto key = [&](const RenderOptions& options, bool centerSample, bool refinePass, bool listPass = false) {
+    return PipelineKey{
+        o.kernel, s.precision, specializationFor(f, s, options, shape, memory, centerSample, refinePass, listPass),
+        o.foldSpirv ? vulkan::SpecializationFolding::FoldSpirv : vulkan::SpecializationFolding::DriverOnly};
   };
+  if (progressiveRender(s, o) && o.kernel == Kernel::Shade) {
+    // Progressive passes over lists of open pixels (host/render/adaptive.h): one pipeline, no
+    // row culling or entry points (the lanes hold pixels from anywhere in the image).
+    plan.sample = key(o, false, false, true);
+    plan.countStats = o.countStats;
+    return plan;
+  }
   plan.sample = key(o, center, false);
   if (o.countStats && o.progressive) {
     // The same pass without counters, for the frames the viewer does not count. Planned with the

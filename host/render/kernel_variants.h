@@ -43,14 +43,15 @@ struct PipelineKey {
 };
 
 // The specialization of one pass of the trace kernel. centerSample: single samples through pixel
-// centres (no sample sequence); refinePass: adaptive antialiasing's second pass.
+// centres (no sample sequence); refinePass: adaptive antialiasing's second pass; listPass: a
+// progressive render's pass over a list of open pixels.
 vulkan::Specialization specializationFor(const Features& features, const RenderSettings& settings,
                                          const RenderOptions& options, const SceneShape& shape, SceneMemoryUse memory,
-                                         bool centerSample, bool refinePass);
+                                         bool centerSample, bool refinePass, bool listPass = false);
 
 // The pipelines one render (or one prepared viewer frame) runs.
 struct KernelPlan {
-  PipelineKey sample;                     // the sample pass (kPassSample)
+  PipelineKey sample;                     // the sample pass (kPassSample; kPassList when progressive)
   std::optional<PipelineKey> quietSample; // the same without counters (frames the viewer does not count)
   std::optional<PipelineKey> refine;      // adaptive antialiasing's refine pass
   bool fill = false;                      // row culling's background fill (shaders/fill.comp)

@@ -69,6 +69,12 @@ struct RenderOptions {
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };
 
+// Whether render() samples progressively (host/render/adaptive.h): a noise threshold or time limit
+// in the settings, or per-pixel statistics asked for.
+inline bool progressiveRender(const RenderSettings& settings, const RenderOptions& options) {
+  return options.kernel == Kernel::Shade && (settings.progressive() || options.pixelStats);
+}
+
 // One pipeline built for a render: what creating it took, the SPIR-V folding included.
 struct PipelineBuild {
   std::string name;
@@ -97,9 +103,18 @@ struct PixelStats {
   bool empty() const { return samples.empty(); }
 };
 
+// What a progressive render reached, over the pixels it rendered (host/render/adaptive.h).
+struct ProgressiveSummary {
+  int passes = 0;                         // 0: not a progressive render
+  double errorMean = 0.0, errorP95 = 0.0; // estimated standard error per pixel
+  double sppMean = 0.0, sppMax = 0.0;
+  double converged = 0.0; // share of pixels at or below the noise threshold (1 without one)
+};
+
 struct RenderResult {
-  Image image; // Kernel::Shade
+  Image image;       // Kernel::Shade
   PixelStats pixels; // RenderOptions::pixelStats, --noise-threshold, --time-limit
+  ProgressiveSummary progressive;
   // Kernel::Hits: per pixel, row-major, vec4(t or -1, hit kind, primitive index, shadow: -1 none
   // traced, 0 lit, 1 occluded).
   std::vector<glm::vec4> hits;

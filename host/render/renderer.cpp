@@ -124,6 +124,10 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
   result.timings.pipelineReused = kernels_.buildMs == 0.0;
   result.timings.pipelinesBuilt = kernels_.built;
 
+  if (progressiveRender(settings, options)) {
+    renderProgressive(settings, options, result);
+    return result;
+  }
   const bool hitsKernel = options.kernel == Kernel::Hits;
   if (hitsKernel)
     result.hits.resize(static_cast<std::size_t>(settings.width) * settings.height);
@@ -149,6 +153,113 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
     traceBands(true, rowBegin, rowEnd, settings, options, &base, sizer, result, advanced);
   }
   return result;
+}
+
+void Renderer::renderProgressive(const RenderSettings& settings, const RenderOptions& options, RenderResult& result) {
+  checkProgressiveSettings(settings);
+  const std::uint32_t width = settings.width;
+  const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
+  const std::uint32_t rowBegin = std::min(options.rowBegin, rowEnd);
+  ProgressiveImage acc(width, settings.height);
+  std::vector<std::uint32_t> open;
+  open.reserve(static_cast<std::size_t>(width) * (rowEnd - rowBegin));
+  for (std::uint32_t y = rowBegin; y < rowEnd; ++y)
+    for (std::uint32_t x = 0; x < width; ++x) open.push_back(y * width + x);
+  const double totalPixels = static_cast<double>(open.size());
+
+  // Two texels of output per entry; the list itself goes to the pass input (prevImage_).
+  const std::size_t capacity =
+      std::min<std::size_t>(static_cast<std::size_t>(imageWidth_) * imageRows_ / 2, prevImage_->size() / 16);
+  auto start = Clock::now();
+  double msPerSample = 0.0;  // GPU time per pixel-sample, measured
+  std::uint32_t samples = 0; // of each open pixel
+  int passes = 0;
+  std::vector<glm::vec4> list, sums;
+  while (true) {
+    const std::uint32_t k = nextPassSamples(settings, samples, open.size(), msPerSample, result.timings.traceMs);
+    if (k == 0) break;
+    for (std::size_t first = 0; first < open.size();) {
+      if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
+      // A chunk of the list near the band budget at the measured speed (64 K entries per sample first).
+      double want = msPerSample > 0.0 ? options.bandBudgetMs / (msPerSample * k) : 65536.0 / k;
+      std::size_t n = std::clamp<std::size_t>(static_cast<std::size_t>(want), 4096, capacity);
+      n = std::min(n, open.size() - first);
+      list.resize(n);
+      for (std::size_t j = 0; j < n; ++j) {
+        std::uint32_t i = open[first + j];
+        list[j] = glm::vec4(static_cast<float>(i % width), static_cast<float>(i / width), 0.0f, 0.0f);
+      }
+      prevImage_->write(list.data(), n * sizeof(glm::vec4));
+
+      gpu::PushConstants push{};
+      push.pass = gpu::kPassList;
+      push.tileSize = glm::uvec2(static_cast<std::uint32_t>(n), 1);
+      BandTimes t =
+          submitBand(context_, timer_, "sampling", 0, settings.height, [&](const vk::raii::CommandBuffer& cmd) {
+            cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
+            cmd.bindPipeline(vk::PipelineBindPoint::eCompute, kernels_.sample->handle());
+            timer_.start(cmd);
+            // One dispatch per sample, as recordDispatch (Mesa 22's loop limit applies per dispatch),
+            // except for short lists: a dispatch of a few workgroups is mostly launch overhead, so the
+            // last passes, over a few hundred pixels with hundreds of samples each, take several
+            // samples per dispatch (a tree that still meets Mesa 22's limit is counted as truncated).
+            constexpr std::uint32_t group = gpu::kWorkgroupSizeX * gpu::kWorkgroupSizeY;
+            const auto perDispatch = static_cast<std::uint32_t>(std::clamp<std::size_t>(16384 / n, 1, 16));
+            for (std::uint32_t s = 0; s < k; s += perDispatch) {
+              gpu::PushConstants one = push;
+              one.sampleBase = samples + s;
+              one.sampleCount = std::min(perDispatch, k - s);
+              if (s > 0) {
+                one.flags = gpu::kFlagAccumulate;
+                vk::MemoryBarrier sumsBarrier(vk::AccessFlagBits::eShaderWrite,
+                                              vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
+                                    vk::PipelineStageFlagBits::eComputeShader, {}, sumsBarrier, {}, {});
+              }
+              cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, one);
+              cmd.dispatch(static_cast<std::uint32_t>((n + group - 1) / group), 1, 1);
+            }
+            timer_.stop(cmd);
+          });
+      result.timings.traceMs += t.gpuMs;
+      result.timings.traceWallMs += t.wallMs;
+      ++result.timings.bands;
+      result.stats += readStatsAndReset();
+      msPerSample = t.gpuMs / (static_cast<double>(n) * k);
+
+      auto readStart = Clock::now();
+      sums.resize(2 * n);
+      image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
+      for (std::size_t j = 0; j < n; ++j) {
+        std::uint32_t i = open[first + j];
+        acc.add(i % width, i / width, sums[2 * j], sums[2 * j + 1]);
+      }
+      result.timings.readbackMs += msSince(readStart);
+      first += n;
+
+      if (options.progress) {
+        RenderProgress p;
+        const double closed = totalPixels - static_cast<double>(open.size() - first);
+        p.fraction = settings.timeLimit > 0.0 ? std::min(1.0, result.timings.traceMs / (settings.timeLimit * 1e3))
+                                              : closed / std::max(1.0, totalPixels);
+        p.elapsedMs = msSince(start);
+        p.raysPerSecond = p.elapsedMs > 0 ? static_cast<double>(result.stats.total()) / (p.elapsedMs * 1e-3) : 0.0;
+        p.remainingMs = p.fraction > 0 ? p.elapsedMs * (1.0 - p.fraction) / p.fraction : 0.0;
+        options.progress(p);
+      }
+    }
+    samples += k;
+    ++passes;
+    // Decisions start once every pixel has min_spp samples (two passes of half each).
+    if (settings.noiseThreshold > 0.0 && samples >= static_cast<std::uint32_t>(settings.minSpp))
+      open = acc.stillOpen(open, settings.noiseThreshold);
+  }
+  result.image = acc.image();
+  result.pixels = acc.stats();
+  result.progressive = summarize(result.pixels, passes);
+  // Converged: closed by the threshold before the cap (without one, every pixel counts).
+  if (settings.noiseThreshold > 0.0)
+    result.progressive.converged = 1.0 - static_cast<double>(open.size()) / totalPixels;
 }
 
 void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, const RenderSettings& settings,
@@ -222,7 +333,8 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
                                         context_.info().name + " reads from one texel buffer (maxTexelBufferElements)");
   }
   auto rows = static_cast<std::uint32_t>(std::min<std::uint64_t>(rowsFit, settings.height));
-  ensureImageWindow(settings.width, rows, adaptive);
+  // A progressive render lists its open pixels in the pass input (the refine pass's buffer).
+  ensureImageWindow(settings.width, rows, adaptive || progressiveRender(settings, options));
   writeFrameParams(camera, settings, current_);
 }
 

@@ -10,6 +10,7 @@
 #include <vulkan/vulkan_raii.hpp>
 
 #include "image/image.h"
+#include "render/adaptive.h"
 #include "render/band_loop.h"
 #include "render/gpu_scene.h"
 #include "render/kernel_variants.h"
@@ -72,6 +73,9 @@ private:
   void traceBands(bool refine, std::uint32_t begin, std::uint32_t end, const RenderSettings& settings,
                   const RenderOptions& options, const Image* base, BandSizer& sizer, RenderResult& result,
                   const std::function<void(std::uint32_t)>& advanced);
+  // Progressive passes over lists of open pixels (adaptive.h): the noise threshold, the time
+  // limit, per-pixel statistics.
+  void renderProgressive(const RenderSettings& settings, const RenderOptions& options, RenderResult& result);
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();

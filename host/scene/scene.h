@@ -81,6 +81,15 @@ struct RenderSettings {
   BvhMode bvh = BvhMode::Auto;
   Precision precision = Precision::Float32; // float64: the accuracy reference (needs shaderFloat64)
   TextureFilter textureFilter = TextureFilter::Cone;
+  // Progressive rendering (host/render/adaptive.h): either one turns it on, and spp is not used.
+  // noiseThreshold: a pixel stops once its estimated standard error (and its neighbours') is below
+  // this, in linear RGB (0: off). timeLimit: passes stop before the trace would exceed this many
+  // seconds of GPU time (0: none). Each pixel gets at least minSpp and at most maxSpp samples.
+  double noiseThreshold = 0.0;
+  double timeLimit = 0.0;
+  int minSpp = 16;
+  int maxSpp = 1024;
+  bool progressive() const { return noiseThreshold > 0.0 || timeLimit > 0.0; }
 };
 
 struct Checker {

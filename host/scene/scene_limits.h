@@ -9,9 +9,10 @@
 
 namespace vkray {
 
-inline constexpr long long kMaxImageSide = 16384; // pixels, width and height
-inline constexpr long long kMaxDepthLimit = 64;   // max_depth
-inline constexpr long long kMaxSpp = 4096;        // samples per pixel
+inline constexpr long long kMaxImageSide = 16384;           // pixels, width and height
+inline constexpr long long kMaxDepthLimit = 64;             // max_depth
+inline constexpr long long kMaxSpp = 4096;                  // samples per pixel
+inline constexpr double kMaxTimeLimitSeconds = 7 * 86400.0; // time_limit: a week
 inline constexpr std::size_t kMaxPolygonVertices = 64;
 inline constexpr std::size_t kMaxPrimitives = 1u << 24;
 inline constexpr std::size_t kMaxMaterialCount = gpu::kMaxMaterials;

@@ -97,7 +97,8 @@ void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sa
 
 void readRender(const JsonNode& node, RenderSettings& r) {
   node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics", "fresnel",
-                  "transmissive_shadows", "precision", "bvh", "texture_filter"});
+                  "transmissive_shadows", "precision", "bvh", "texture_filter", "noise_threshold", "time_limit",
+                  "min_spp", "max_spp"});
   if (auto v = node.find("max_depth")) r.maxDepth = static_cast<int>(v->integer(0, kMaxDepthLimit));
   if (auto v = node.find("spp")) r.spp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("bailout")) r.bailout = v->number(0.0, 1.0);
@@ -109,6 +110,16 @@ void readRender(const JsonNode& node, RenderSettings& r) {
   if (auto v = node.find("precision")) r.precision = v->enumValue<Precision>();
   if (auto v = node.find("texture_filter")) r.textureFilter = v->enumValue<TextureFilter>();
   if (auto v = node.find("bvh")) r.bvh = v->enumValue<BvhMode>();
+  if (auto v = node.find("noise_threshold")) {
+    r.noiseThreshold = v->number(0.0, 1e6);
+    if (!(r.noiseThreshold > 0.0)) v->fail("must be > 0 (a standard error in linear RGB), got 0");
+  }
+  if (auto v = node.find("time_limit")) {
+    r.timeLimit = v->number(0.0, kMaxTimeLimitSeconds);
+    if (!(r.timeLimit > 0.0)) v->fail("must be > 0 seconds, got 0");
+  }
+  if (auto v = node.find("min_spp")) r.minSpp = static_cast<int>(v->integer(1, kMaxSpp));
+  if (auto v = node.find("max_spp")) r.maxSpp = static_cast<int>(v->integer(1, kMaxSpp));
 }
 
 Material readMaterial(const JsonNode& node, const std::string& name) {

@@ -110,7 +110,10 @@ VKRAY_CONST(uint, kSpecTextureFilter, 28u); // kTextureNearest / kTextureBilinea
 VKRAY_CONST(uint, kSpecAlphaMask, 29u);
 // Some triangle has vertex colours (glTF COLOR_0).
 VKRAY_CONST(uint, kSpecVertexColors, 30u);
-VKRAY_CONST(uint, kSpecCount, 31u);
+// The progressive renderer's pass (kPassList, host/render/adaptive.h): each invocation traces the
+// pixel of one entry of a list of open pixels and writes its sums and sums of squares.
+VKRAY_CONST(uint, kSpecListPass, 31u);
+VKRAY_CONST(uint, kSpecCount, 32u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -186,6 +189,7 @@ VKRAY_CONST(uint, kEntryPointsMax, 7u); // kEntryStackSlots + 1
 // The image holds, per pixel, vec4(sum of sample radiances, sample count); the host divides.
 VKRAY_CONST(uint, kPassSample, 0u);       // sampleCount samples per pixel (sampleBase, sampleBase + 1, ...)
 VKRAY_CONST(uint, kPassRefine, 1u);       // adaptive AA: resample pixels whose neighbours differ
+VKRAY_CONST(uint, kPassList, 2u);         // progressive: sampleCount samples of each listed pixel
 VKRAY_CONST(uint, kFlagCenterSample, 1u); // the single sample goes through the pixel centre
 VKRAY_CONST(uint, kFlagAccumulate, 2u);   // add to the sums already in the image
 
@@ -440,7 +444,7 @@ struct RayStats {
 struct PushConstants {
   uvec2 tileOrigin; // first pixel of this dispatch
   uvec2 tileSize;   // pixels covered by this dispatch
-  uint pass;        // kPassSample / kPassRefine
+  uint pass;        // kPassSample / kPassRefine / kPassList
   uint sampleBase;  // index of the first sample in the per-pixel sequence
   uint sampleCount; // samples per pixel in this dispatch
   uint flags;       // kFlagCenterSample | kFlagAccumulate

@@ -1,0 +1,162 @@
+// Progressive rendering's host side (see adaptive.h).
+#include "render/adaptive.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "util/error.h"
+
+namespace vkray {
+
+void checkProgressiveSettings(const RenderSettings& s) {
+  if (!s.progressive()) return;
+  if (s.minSpp > s.maxSpp) {
+    throw InputError("render.min_spp",
+                     "must not exceed max_spp (" + std::to_string(s.maxSpp) + "), got " + std::to_string(s.minSpp));
+  }
+  if (s.antialiasing == Antialiasing::Adaptive && s.spp > 1) {
+    throw InputError("render.antialiasing",
+                     "\"adaptive\" and a noise threshold or time limit both decide where samples go: use one");
+  }
+}
+
+double standardError(const PixelMoments& m) {
+  const double n = m.samples;
+  if (n < 2.0) return std::numeric_limits<double>::infinity();
+  const double n1 = m.earlierSamples, n2 = n - n1;
+  double worst = 0.0;
+  if (n1 > 0.0 && n2 > 0.0) {
+    // Split in two: the earlier passes' mean A and the last pass's mean B. With independent parts
+    // of per-sample variance s^2, var(A - B) = s^2 n / (n1 n2) and var(mean) = s^2 / n, so
+    // var(mean) = (A - B)^2 n1 n2 / n^2. Each part is a whole stratum of the sequence (counts
+    // double), so the difference sees the error the stratified mean actually has.
+    for (int c = 0; c < 3; ++c) {
+      const double a = m.earlierSum[c] / n1, b = (m.sum[c] - m.earlierSum[c]) / n2;
+      worst = std::max(worst, (a - b) * (a - b) * n1 * n2 / (n * n));
+    }
+    return std::sqrt(worst);
+  }
+  // One pass so far: the samples' own variance, as if they were independent (an overestimate for a
+  // stratified sequence). sum2 - sum^2 / n, the sum of squared deviations, can round just below 0.
+  for (int c = 0; c < 3; ++c) {
+    double deviations = std::max(0.0, m.squares[c] - m.sum[c] * m.sum[c] / n);
+    worst = std::max(worst, deviations / (n * (n - 1.0)));
+  }
+  return std::sqrt(worst);
+}
+
+ProgressiveImage::ProgressiveImage(std::uint32_t width, std::uint32_t height)
+    : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height),
+      errors_(pixels_.size(), std::numeric_limits<double>::infinity()) {}
+
+void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& squaresAndRays) {
+  std::size_t i = static_cast<std::size_t>(y) * width_ + x;
+  PixelMoments& m = pixels_[i];
+  // One call per pixel per pass: what the pixel had so far becomes the estimate's earlier part.
+  m.earlierSum = m.sum;
+  m.earlierSamples = m.samples;
+  m.sum += glm::dvec3(glm::vec3(sums));
+  m.samples += sums.w;
+  m.squares += glm::dvec3(glm::vec3(squaresAndRays));
+  m.rays += squaresAndRays.w;
+  errors_[i] = standardError(m);
+}
+
+double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) const {
+  const std::uint32_t x0 = x > 0 ? x - 1 : 0, x1 = std::min(width_ - 1, x + 1);
+  const std::uint32_t y0 = y > 0 ? y - 1 : 0, y1 = std::min(height_ - 1, y + 1);
+  double sum = 0.0;
+  int count = 0;
+  for (std::uint32_t v = y0; v <= y1; ++v) {
+    for (std::uint32_t u = x0; u <= x1; ++u) {
+      // A neighbour never traced (outside the rendered rows) has no say.
+      const std::size_t j = static_cast<std::size_t>(v) * width_ + u;
+      if (pixels_[j].samples <= 0.0) continue;
+      sum += errors_[j];
+      ++count;
+    }
+  }
+  return count > 0 ? sum / count : std::numeric_limits<double>::infinity();
+}
+
+std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::uint32_t>& open, double threshold) const {
+  std::vector<std::uint32_t> next;
+  for (std::uint32_t i : open) {
+    if (pixels_[i].samples < 2.0 || !(neighbourhoodError(i % width_, i / width_) <= threshold)) next.push_back(i);
+  }
+  return next;
+}
+
+Image ProgressiveImage::image() const {
+  Image img(width_, height_);
+  for (std::size_t i = 0; i < pixels_.size(); ++i) {
+    const PixelMoments& m = pixels_[i];
+    img.pixels[i] = m.samples > 0.0 ? glm::vec3(m.sum / m.samples) : glm::vec3(0.0f);
+  }
+  return img;
+}
+
+PixelStats ProgressiveImage::stats() const {
+  PixelStats s;
+  s.samples.resize(pixels_.size());
+  s.error.resize(pixels_.size());
+  s.rays.resize(pixels_.size());
+  for (std::size_t i = 0; i < pixels_.size(); ++i) {
+    s.samples[i] = static_cast<float>(pixels_[i].samples);
+    // A pixel with one sample (or none) has no estimate: +inf, as an EXR layer shows it.
+    s.error[i] = static_cast<float>(errors_[i]);
+    s.rays[i] = static_cast<float>(pixels_[i].rays);
+  }
+  return s;
+}
+
+std::uint32_t nextPassSamples(const RenderSettings& s, std::uint32_t samplesSoFar, std::size_t openPixels,
+                              double msPerSample, double spentMs) {
+  const auto cap = static_cast<std::uint32_t>(std::max(1, s.maxSpp));
+  if (openPixels == 0 || samplesSoFar >= cap) return 0;
+  std::uint32_t k;
+  if (samplesSoFar == 0) {
+    // With a noise threshold every pixel gets min_spp in two passes of half each, so the first
+    // decision has two parts to compare; a time limit alone starts at one sample, which also
+    // measures the speed.
+    k = s.noiseThreshold > 0.0 ? static_cast<std::uint32_t>(std::max(1, s.minSpp / 2)) : 1u;
+  } else {
+    k = samplesSoFar; // the count doubles
+  }
+  k = std::min(k, cap - samplesSoFar);
+  if (s.timeLimit > 0.0 && msPerSample > 0.0) {
+    const double leftMs = s.timeLimit * 1e3 - spentMs;
+    const double perSample = msPerSample * static_cast<double>(openPixels); // one sample of each
+    const double fit = leftMs / perSample;
+    if (fit < 1.0) return 0;
+    k = std::min<std::uint32_t>(k, static_cast<std::uint32_t>(std::min(fit, 1e9)));
+  }
+  return k;
+}
+
+ProgressiveSummary summarize(const PixelStats& stats, int passes) {
+  ProgressiveSummary p;
+  p.passes = passes;
+  std::vector<double> errors;
+  double sppSum = 0.0;
+  std::size_t traced = 0;
+  for (std::size_t i = 0; i < stats.samples.size(); ++i) {
+    if (stats.samples[i] <= 0.0f) continue; // rows outside the tile
+    ++traced;
+    sppSum += stats.samples[i];
+    p.sppMax = std::max(p.sppMax, static_cast<double>(stats.samples[i]));
+    errors.push_back(stats.error[i]);
+  }
+  if (traced == 0) return p;
+  p.sppMean = sppSum / static_cast<double>(traced);
+  p.converged = 1.0;
+  std::sort(errors.begin(), errors.end());
+  double sum = 0.0;
+  for (double e : errors) sum += std::isfinite(e) ? e : 0.0;
+  p.errorMean = sum / static_cast<double>(errors.size());
+  p.errorP95 = errors[std::min(errors.size() - 1, static_cast<std::size_t>(0.95 * static_cast<double>(errors.size())))];
+  return p;
+}
+
+} // namespace vkray
