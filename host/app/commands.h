@@ -22,10 +22,11 @@ struct RenderArgs {
   bool quiet = false;
   KernelFlags kernel;
   double bandMs = 100.0;
-  std::optional<int> frame; // --frame N
-  std::string frames;       // --frames A-B
-  std::string tile;         // --tile I/N
-  bool exrHalf = false;     // --exr-half
+  std::optional<int> frame;       // --frame N
+  std::string frames;             // --frames A-B
+  std::string tile;               // --tile I/N
+  bool exrHalf = false;           // --exr-half
+  std::optional<std::string> aov; // --aov LIST|all (render/aov.h)
 };
 
 struct MergeArgs {

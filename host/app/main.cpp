@@ -70,6 +70,12 @@ int main(int argc, char** argv) {
                    "output image: .png (sRGB 8-bit), .pfm (linear float) or .exr (linear float; OpenEXR)")
       ->required();
   renderCmd->add_flag("--exr-half", render.exrHalf, "write the .exr's channels as 16-bit half instead of 32-bit float");
+  // Through a callback: CLI11 reads an empty value into a std::optional as "not given", and
+  // `--aov ''` is an empty list, an error.
+  renderCmd->add_option_function<std::string>(
+      "--aov", [&render](const std::string& list) { render.aov = list; },
+      "also write AOV layers into the .exr: a comma-separated list of depth, normal, albedo, "
+      "spp, error, rays, or all (32-bit float channels such as depth.Z, normal.X)");
   renderCmd->add_flag("--stats", render.stats, "print timings, ray counts and rays per second as 'name: value' lines");
   renderCmd->add_flag("--explain", render.explain, "say which effects the scene calls for and what is compiled out");
   renderCmd->add_flag("-q,--quiet", render.quiet, "no progress bar");

@@ -8,6 +8,7 @@
 #include "app/terminal.h"
 #include "image/image_io.h"
 #include "image/tile_io.h"
+#include "render/aov.h"
 #include "render/renderer.h"
 #include "scene/animation.h"
 #include "scene/features.h"
@@ -164,6 +165,22 @@ std::optional<TileRequest> tileRequest(const RenderArgs& args, const RenderSetti
   return t;
 }
 
+// The AOVs asked for, checked before any work: each names a layer of an EXR of the whole image.
+std::vector<Aov> requestedAovs(const RenderArgs& args) {
+  if (!args.aov) return {};
+  std::vector<Aov> aovs = parseAovList(*args.aov);
+  // A tile is a .pfm band for `vkray merge`, which carries RGB alone.
+  if (!args.tile.empty()) {
+    throw InputError("--aov", "tiles (--tile) are .pfm files, which hold no layers: render the whole image to "
+                              "an .exr for AOVs");
+  }
+  if (imageFormatFor(args.output) != ImageFormat::Exr) {
+    throw InputError("--aov", "the output '" + args.output.string() +
+                                  "' is not an .exr file (PNG and PFM hold RGB alone, not layers)");
+  }
+  return aovs;
+}
+
 // --exr-half says how an EXR stores its channels: with another format it is a mistake, not a no-op.
 void checkExrHalf(bool exrHalf, const std::filesystem::path& output) {
   if (exrHalf && imageFormatFor(output) != ImageFormat::Exr) {
@@ -266,6 +283,7 @@ int runRender(const RenderArgs& args) {
   refitCamera(scene); // a fitted camera frames the image as the flags shaped it
   double loadMs = msSince(t0);
   const FrameRange frames = frameRange(args, frameCount(scene));
+  const std::vector<Aov> aovs = requestedAovs(args);
   const std::optional<TileRequest> tile = tileRequest(args, scene.render);
   checkExrHalf(args.exrHalf, args.output);
   // Every output checked, and a range given a pattern, before any time on the GPU.
@@ -306,6 +324,9 @@ int runRender(const RenderArgs& args) {
   options.countStats = args.stats;
   options.bandBudgetMs = args.bandMs;
   options.cancel = &interrupted;
+  options.pixelStats = needsPixelStats(aovs);
+  // The rays layer is the kernel's ray counters, per pixel.
+  if (std::find(aovs.begin(), aovs.end(), Aov::Rays) != aovs.end()) options.countStats = true;
   TileInfo tileInfo;
   if (tile) {
     tileRows(scene.render.height, tile->index, tile->count, tileInfo.rowBegin, tileInfo.rowEnd);
@@ -324,6 +345,20 @@ int runRender(const RenderArgs& args) {
     options.progress = [&](const RenderProgress& p) { bar.update(p); };
     RenderResult result = renderer.render(frameScene.camera, frameScene.render, options);
     bar.finish();
+    ImageWriteOptions write{args.exrHalf, {}};
+    if (!aovs.empty()) {
+      checkPixelStats(aovs, result.pixels); // before the first-hit pass's time
+      std::vector<FirstHit> firstHits;
+      if (needsFirstHits(aovs)) {
+        // The pixel-centre eye rays' first hits: one short pass on the same scene buffers.
+        RenderOptions firstHitPass = options;
+        firstHitPass.kernel = Kernel::Aov;
+        firstHitPass.pixelStats = false;
+        firstHitPass.progress = nullptr;
+        firstHits = renderer.render(frameScene.camera, frameScene.render, firstHitPass).firstHits;
+      }
+      write.exrLayers = aovChannels(aovs, firstHits, result.pixels, result.image.pixels.size());
+    }
 
     if (context.validationEnabled() && context.validationMessageCount() > 0) {
       throw DeviceError("the validation layer reported " + std::to_string(context.validationMessageCount()) +
@@ -347,7 +382,7 @@ int runRender(const RenderArgs& args) {
       tileInfo.fingerprint = sceneFingerprint(frameScene, f);
       writeTile(output, result.image, tileInfo);
     } else {
-      writeImage(output, result.image, ImageWriteOptions{args.exrHalf});
+      writeImage(output, result.image, write);
     }
     double writeMs = msSince(tw);
     if (args.stats) {
@@ -361,7 +396,7 @@ int runRender(const RenderArgs& args) {
 int runMerge(const MergeArgs& args) {
   checkOutputPath(args.output);
   checkExrHalf(args.exrHalf, args.output);
-  writeImage(args.output, mergeTiles(args.tiles), ImageWriteOptions{args.exrHalf});
+  writeImage(args.output, mergeTiles(args.tiles), ImageWriteOptions{args.exrHalf, {}});
   return 0;
 }
 

@@ -40,12 +40,20 @@ private:
 
 } // namespace
 
-std::vector<std::uint8_t> encodeExr(const Image& image, ExrPixels pixels) {
+std::vector<std::uint8_t> encodeExr(const Image& image, ExrPixels pixels, const std::vector<ExrChannel>& extra) {
   const int width = static_cast<int>(image.width), height = static_cast<int>(image.height);
   Imf::Header header(width, height);
   header.compression() = Imf::ZIP_COMPRESSION;
   const Imf::PixelType type = pixels == ExrPixels::Half ? Imf::HALF : Imf::FLOAT;
   for (const char* name : {"R", "G", "B"}) header.channels().insert(name, Imf::Channel(type));
+  for (const ExrChannel& c : extra) {
+    if (c.values.size() != image.pixels.size()) {
+      throw Error("EXR channel " + c.name + " has " + std::to_string(c.values.size()) + " values for " +
+                  std::to_string(image.pixels.size()) + " pixels");
+    }
+    if (header.channels().findChannel(c.name) != nullptr) throw Error("EXR channel " + c.name + " named twice");
+    header.channels().insert(c.name, Imf::Channel(Imf::FLOAT));
+  }
   Imf::FrameBuffer frame;
   std::vector<Imath::half> halves;
   if (pixels == ExrPixels::Half) {
@@ -61,6 +69,10 @@ std::vector<std::uint8_t> encodeExr(const Image& image, ExrPixels pixels) {
   const char* names[] = {"R", "G", "B"};
   for (std::size_t c = 0; c < 3; ++c) {
     frame.insert(names[c], Imf::Slice(type, base + c * channelBytes, pixelBytes, pixelBytes * image.width));
+  }
+  for (const ExrChannel& c : extra) {
+    char* values = reinterpret_cast<char*>(const_cast<float*>(c.values.data()));
+    frame.insert(c.name, Imf::Slice(Imf::FLOAT, values, sizeof(float), sizeof(float) * image.width));
   }
   MemoryStream stream;
   try {

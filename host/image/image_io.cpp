@@ -184,7 +184,11 @@ void writeFileAtomic(const fs::path& path, const std::vector<std::uint8_t>& byte
 }
 
 void writeImage(const fs::path& path, const Image& image, const ImageWriteOptions& options) {
-  switch (imageFormatFor(path)) {
+  const ImageFormat format = imageFormatFor(path);
+  if (format != ImageFormat::Exr && !options.exrLayers.empty()) {
+    throw Error("writing " + path.string() + ": only an .exr file holds layers beside RGB");
+  }
+  switch (format) {
   case ImageFormat::Png:
     writeFileAtomic(path, encodePng(image));
     break;
@@ -192,7 +196,7 @@ void writeImage(const fs::path& path, const Image& image, const ImageWriteOption
     writeFileAtomic(path, encodePfm(image));
     break;
   case ImageFormat::Exr:
-    writeFileAtomic(path, encodeExr(image, options.exrHalf ? ExrPixels::Half : ExrPixels::Float));
+    writeFileAtomic(path, encodeExr(image, options.exrHalf ? ExrPixels::Half : ExrPixels::Float, options.exrLayers));
     break;
   }
 }

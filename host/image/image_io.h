@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "image/exr_io.h"
 #include "image/image.h"
 
 namespace vkray {
@@ -26,6 +27,9 @@ std::vector<std::uint8_t> encodePfm(const Image& image);
 
 struct ImageWriteOptions {
   bool exrHalf = false; // EXR channels as 16-bit half instead of 32-bit float
+  // EXR only: channels beside R, G, B (the AOV layers; render/aov.h). Another format with layers is
+  // a caller's mistake (Error): PNG and PFM hold RGB alone.
+  std::vector<ExrChannel> exrLayers;
 };
 
 void writeImage(const std::filesystem::path& path, const Image& image, const ImageWriteOptions& options = {});

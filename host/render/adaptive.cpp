@@ -10,14 +10,14 @@
 namespace vkray {
 
 void checkProgressiveSettings(const RenderSettings& s) {
-  if (!s.progressive()) return;
-  if (s.minSpp > s.maxSpp) {
+  if (s.progressive() && s.minSpp > s.maxSpp) {
     throw InputError("render.min_spp",
                      "must not exceed max_spp (" + std::to_string(s.maxSpp) + "), got " + std::to_string(s.minSpp));
   }
   if (s.antialiasing == Antialiasing::Adaptive && s.spp > 1) {
     throw InputError("render.antialiasing",
-                     "\"adaptive\" and a noise threshold or time limit both decide where samples go: use one");
+                     "\"adaptive\" cannot be combined with a noise threshold, a time limit or the spp, error "
+                     "and rays AOVs (they sample progressively): use one");
   }
 }
 
@@ -113,10 +113,13 @@ PixelStats ProgressiveImage::stats() const {
 
 std::uint32_t nextPassSamples(const RenderSettings& s, std::uint32_t samplesSoFar, std::size_t openPixels,
                               double msPerSample, double spentMs) {
-  const auto cap = static_cast<std::uint32_t>(std::max(1, s.maxSpp));
+  // Without a threshold or limit (per-pixel statistics asked for), every pixel gets spp.
+  const auto cap = static_cast<std::uint32_t>(std::max(1, s.progressive() ? s.maxSpp : s.spp));
   if (openPixels == 0 || samplesSoFar >= cap) return 0;
   std::uint32_t k;
-  if (samplesSoFar == 0) {
+  if (!s.progressive()) {
+    k = samplesSoFar == 0 ? std::max(1u, cap / 2) : cap - samplesSoFar; // two halves: an estimate
+  } else if (samplesSoFar == 0) {
     // With a noise threshold every pixel gets min_spp in two passes of half each, so the first
     // decision has two parts to compare; a time limit alone starts at one sample, which also
     // measures the speed.

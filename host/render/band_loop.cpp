@@ -116,4 +116,11 @@ void readBandHits(const vulkan::Buffer& window, std::uint32_t width, std::uint32
               static_cast<std::size_t>(width) * rows * sizeof(glm::vec4));
 }
 
+void readBandFirstHits(const vulkan::Buffer& window, std::uint32_t width, std::uint32_t y, std::uint32_t rows,
+                       std::vector<FirstHit>& firstHits) {
+  // Two texels per pixel, laid out as FirstHit.
+  window.read(firstHits.data() + static_cast<std::size_t>(y) * width,
+              static_cast<std::size_t>(width) * rows * sizeof(FirstHit));
+}
+
 } // namespace vkray

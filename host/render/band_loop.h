@@ -67,9 +67,12 @@ BandTimes submitBand(const vulkan::Context& context, const GpuTimer& timer, cons
 void uploadRefineRows(const Image& base, std::uint32_t y, std::uint32_t rows, vulkan::Buffer& prev,
                       gpu::PushConstants& push);
 
-// Band rows of the image window: the averages of the sums into `image`, or the hit records.
+// Band rows of the image window: the averages of the sums into `image`, the hit records, or the
+// first-hit AOVs (two texels per pixel).
 void readBandImage(const vulkan::Buffer& window, std::uint32_t y, std::uint32_t rows, Image& image);
 void readBandHits(const vulkan::Buffer& window, std::uint32_t width, std::uint32_t y, std::uint32_t rows,
                   std::vector<glm::vec4>& hits);
+void readBandFirstHits(const vulkan::Buffer& window, std::uint32_t width, std::uint32_t y, std::uint32_t rows,
+                       std::vector<FirstHit>& firstHits);
 
 } // namespace vkray

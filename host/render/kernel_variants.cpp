@@ -1,6 +1,7 @@
 // Kernel variants: the plan of a render's pipelines and the library that builds them.
 #include "render/kernel_variants.h"
 
+#include "aov_spv.h"     // kAovSpv: shaders/aov.comp, the first-hit AOVs
 #include "entry_spv.h"   // kEntrySpv: shaders/entry.comp, each tile's BVH entry points
 #include "fill_spv.h"    // kFillSpv: shaders/fill.comp, row culling's background fill
 #include "hits_spv.h"    // kHitsSpv: shaders/hits.comp, the ray queries alone
@@ -80,12 +81,16 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
 KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderOptions& o, const SceneShape& shape,
                        SceneMemoryUse memory) {
   KernelPlan plan;
-  const bool adaptive = s.antialiasing == Antialiasing::Adaptive && s.spp > 1;
+  // Only the shading kernel has a refine pass; the ray-query and AOV kernels trace pixel centres.
+  const bool adaptive = o.kernel == Kernel::Shade && s.antialiasing == Antialiasing::Adaptive && s.spp > 1;
   // Single-sample passes go through pixel centres: a pipeline without the sample sequence.
   const bool center = !o.progressive && (s.spp == 1 || adaptive);
   auto key = [&](const RenderOptions& options, bool centerSample, bool refinePass, bool listPass = false) {
+    // The first-hit AOVs are float32 whatever the render's precision: one eye ray, no tree to
+    // keep from cracks, and a depth or normal needs no more.
+    Precision precision = o.kernel == Kernel::Aov ? Precision::Float32 : s.precision;
     return PipelineKey{
-        o.kernel, s.precision, specializationFor(f, s, options, shape, memory, centerSample, refinePass, listPass),
+        o.kernel, precision, specializationFor(f, s, options, shape, memory, centerSample, refinePass, listPass),
         o.foldSpirv ? vulkan::SpecializationFolding::FoldSpirv : vulkan::SpecializationFolding::DriverOnly};
   };
   if (progressiveRender(s, o) && o.kernel == Kernel::Shade) {
@@ -188,10 +193,12 @@ std::unique_ptr<vulkan::ComputePipeline>& KernelLibrary::traceSlot(const Pipelin
     throw InputError("render.precision", "float64 needs shaderFloat64, which " + context_.info().name + " lacks");
   }
   if (f64 && key.kernel == Kernel::Hits) throw InputError("render.precision", "the ray-query kernel is float32 only");
-  std::span<const std::uint32_t> code = key.kernel == Kernel::Hits ? std::span<const std::uint32_t>(kHitsSpv)
-                                        : f64                      ? std::span<const std::uint32_t>(kTrace64Spv)
-                                                                   : std::span<const std::uint32_t>(kTraceSpv);
-  std::string name = std::string(key.kernel == Kernel::Hits ? "hits" : "trace") + role + (f64 ? " (float64)" : "");
+  std::span<const std::uint32_t> code = key.kernel == Kernel::Hits  ? std::span<const std::uint32_t>(kHitsSpv)
+                                        : key.kernel == Kernel::Aov ? std::span<const std::uint32_t>(kAovSpv)
+                                        : f64                       ? std::span<const std::uint32_t>(kTrace64Spv)
+                                                                    : std::span<const std::uint32_t>(kTraceSpv);
+  const char* kernel = key.kernel == Kernel::Hits ? "hits" : key.kernel == Kernel::Aov ? "aov" : "trace";
+  std::string name = std::string(kernel) + role + (f64 ? " (float64)" : "");
   jobs.push_back(Job{&slot, code, key.spec, name, key.folding});
   return slot;
 }

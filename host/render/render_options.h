@@ -35,8 +35,9 @@ template <> struct EnumNames<SceneMemory> {
 
 // Which kernel render() runs: the renderer's, or the ray queries alone (shaders/hits.comp: closest
 // hit of each pixel-centre eye ray and, with shadows, one any-hit shadow ray; no shading), which
-// `vkray bench meshes` sets against Embree.
-enum class Kernel { Shade, Hits };
+// `vkray bench meshes` sets against Embree, or the first-hit AOVs of the pixel-centre eye rays
+// (shaders/aov.comp: depth, normal, albedo; `render --aov`).
+enum class Kernel { Shade, Hits, Aov };
 
 struct RenderOptions {
   Kernel kernel = Kernel::Shade;
@@ -111,6 +112,16 @@ struct ProgressiveSummary {
   double converged = 0.0; // share of pixels at or below the noise threshold (1 without one)
 };
 
+// Kernel::Aov, one pixel: what its pixel-centre eye ray meets first (shaders/aov.comp writes the two
+// texels as they lie here).
+struct FirstHit {
+  float depth;      // distance from the eye along the ray; +inf where nothing is hit
+  glm::vec3 normal; // world-space unit shading normal, towards the eye; 0 where nothing is hit
+  glm::vec3 albedo; // base colour (linear; checker, texture, vertex colour applied); 0 where nothing is hit
+  float hit;        // 1 hit, 0 nothing
+};
+static_assert(sizeof(FirstHit) == 2 * sizeof(glm::vec4), "two texels per pixel (shaders/aov.comp)");
+
 struct RenderResult {
   Image image;       // Kernel::Shade
   PixelStats pixels; // RenderOptions::pixelStats, --noise-threshold, --time-limit
@@ -118,6 +129,7 @@ struct RenderResult {
   // Kernel::Hits: per pixel, row-major, vec4(t or -1, hit kind, primitive index, shadow: -1 none
   // traced, 0 lit, 1 occluded).
   std::vector<glm::vec4> hits;
+  std::vector<FirstHit> firstHits; // Kernel::Aov: per pixel, row-major
   RayStats stats;
   RenderTimings timings;
   Features features;

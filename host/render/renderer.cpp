@@ -128,12 +128,15 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
     renderProgressive(settings, options, result);
     return result;
   }
-  const bool hitsKernel = options.kernel == Kernel::Hits;
-  if (hitsKernel)
-    result.hits.resize(static_cast<std::size_t>(settings.width) * settings.height);
+  const std::size_t pixels = static_cast<std::size_t>(settings.width) * settings.height;
+  if (options.kernel == Kernel::Hits)
+    result.hits.resize(pixels);
+  else if (options.kernel == Kernel::Aov)
+    result.firstHits.resize(pixels);
   else
     result.image = Image(settings.width, settings.height);
-  const bool adaptive = !hitsKernel && settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
+  const bool adaptive =
+      options.kernel == Kernel::Shade && settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
 
   // A row window (a tile): adaptive AA's base pass also traces the row on each side that the refine
   // pass reads as neighbours, so the window's pixels are those of the whole image.
@@ -266,7 +269,8 @@ void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, c
                           const RenderOptions& options, const Image* base, BandSizer& sizer, RenderResult& result,
                           const std::function<void(std::uint32_t)>& advanced) {
   const std::uint32_t width = settings.width;
-  const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
+  const bool adaptive =
+      options.kernel == Kernel::Shade && settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
   for (std::uint32_t y = begin; y < end;) {
     if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
     const std::uint32_t rows = sizer.rowsAt(y, end);
@@ -302,6 +306,8 @@ void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, c
     auto readStart = Clock::now();
     if (options.kernel == Kernel::Hits)
       readBandHits(*image_, width, y, rows, result.hits);
+    else if (options.kernel == Kernel::Aov)
+      readBandFirstHits(*image_, width, y, rows, result.firstHits);
     else
       readBandImage(*image_, y, rows, result.image);
     result.timings.readbackMs += msSince(readStart);
@@ -320,8 +326,11 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   memory_ = sceneBuffers_.memoryFor(options.sceneMemory);
   kernels_ = library_.realize(planKernels(current_, settings, options, shapeOf(gpuScene_), memory_));
 
-  const bool adaptive = settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
-  std::uint64_t rowBytes = static_cast<std::uint64_t>(settings.width) * sizeof(glm::vec4);
+  const bool adaptive =
+      options.kernel == Kernel::Shade && settings.antialiasing == Antialiasing::Adaptive && settings.spp > 1;
+  // The AOV kernel writes two texels per pixel (shaders/aov.comp), the others one.
+  const std::uint32_t pixelTexels = options.kernel == Kernel::Aov ? 2u : 1u;
+  std::uint64_t rowBytes = static_cast<std::uint64_t>(settings.width) * pixelTexels * sizeof(glm::vec4);
   std::uint64_t limit =
       std::min<std::uint64_t>(context_.info().maxTexelBufferElements * sizeof(glm::vec4), kImageWindowBudget);
   std::uint64_t rowsFit = limit / rowBytes;
@@ -334,7 +343,7 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   }
   auto rows = static_cast<std::uint32_t>(std::min<std::uint64_t>(rowsFit, settings.height));
   // A progressive render lists its open pixels in the pass input (the refine pass's buffer).
-  ensureImageWindow(settings.width, rows, adaptive || progressiveRender(settings, options));
+  ensureImageWindow(settings.width, rows, pixelTexels, adaptive || progressiveRender(settings, options));
   writeFrameParams(camera, settings, current_);
 }
 
@@ -352,15 +361,16 @@ void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t s
                  countRays ? kernels_.fill : kernels_.quietFill);
 }
 
-void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev) {
-  bool rebuild = !image_ || imageWidth_ != width || imageRows_ != rows;
+void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev) {
+  bool rebuild = !image_ || imageWidth_ != width || imageRows_ != rows || imagePixelTexels_ != pixelTexels;
   if (rebuild) {
-    vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width) * rows * sizeof(glm::vec4);
+    vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width) * rows * pixelTexels * sizeof(glm::vec4);
     image_.reset(); // the old window's memory goes back first
     image_ =
         std::make_unique<vulkan::Buffer>(context_, bytes, kImageTexelFormat, vulkan::MemoryUse::DeviceLocal, "image");
     imageWidth_ = width;
     imageRows_ = rows;
+    imagePixelTexels_ = pixelTexels;
   }
   // The refine pass reads the band plus one row above and below.
   vk::DeviceSize prevBytes =

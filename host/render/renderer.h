@@ -76,7 +76,8 @@ private:
   // Progressive passes over lists of open pixels (adaptive.h): the noise threshold, the time
   // limit, per-pixel statistics.
   void renderProgressive(const RenderSettings& settings, const RenderOptions& options, RenderResult& result);
-  void ensureImageWindow(std::uint32_t width, std::uint32_t rows, bool needPrev);
+  // pixelTexels: RGBA32F texels per pixel of the window (2 for Kernel::Aov, else 1).
+  void ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();
   // fill: the background pipeline for rows that see nothing (row culling), or null to trace all.
@@ -117,6 +118,7 @@ private:
   std::unique_ptr<vulkan::Buffer> entryPoints_; // two uvec4 per 8 x 8 tile of the window
   std::uint32_t imageWidth_ = 0;
   std::uint32_t imageRows_ = 0;
+  std::uint32_t imagePixelTexels_ = 1;
 };
 
 } // namespace vkray
