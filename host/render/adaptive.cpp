@@ -73,11 +73,11 @@ double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) co
       // A neighbour never traced (outside the rendered rows) has no say.
       const std::size_t j = static_cast<std::size_t>(v) * width_ + u;
       if (pixels_[j].samples <= 0.0) continue;
-      sum += errors_[j];
+      sum += errors_[j] * errors_[j];
       ++count;
     }
   }
-  return count > 0 ? sum / count : std::numeric_limits<double>::infinity();
+  return count > 0 ? std::sqrt(sum / count) : std::numeric_limits<double>::infinity();
 }
 
 std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::uint32_t>& open, double threshold) const {

@@ -109,7 +109,8 @@ struct ProgressiveSummary {
   int passes = 0;                         // 0: not a progressive render
   double errorMean = 0.0, errorP95 = 0.0; // estimated standard error per pixel
   double sppMean = 0.0, sppMax = 0.0;
-  double converged = 0.0; // share of pixels at or below the noise threshold (1 without one)
+  double converged = 0.0;  // share of pixels at or below the noise threshold (1 without one)
+  double lastPassMs = 0.0; // GPU time of the last pass (a time limit holds within it)
 };
 
 // Kernel::Aov, one pixel: what its pixel-centre eye ray meets first (shaders/aov.comp writes the two

@@ -177,10 +177,12 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   double msPerSample = 0.0;  // GPU time per pixel-sample, measured
   std::uint32_t samples = 0; // of each open pixel
   int passes = 0;
+  double lastPassMs = 0.0;
   std::vector<glm::vec4> list, sums;
   while (true) {
     const std::uint32_t k = nextPassSamples(settings, samples, open.size(), msPerSample, result.timings.traceMs);
     if (k == 0) break;
+    double passMs = 0.0;
     for (std::size_t first = 0; first < open.size();) {
       if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
       // A chunk of the list near the band budget at the measured speed (64 K entries per sample first).
@@ -227,6 +229,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       result.timings.traceMs += t.gpuMs;
       result.timings.traceWallMs += t.wallMs;
       ++result.timings.bands;
+      passMs += t.gpuMs;
       result.stats += readStatsAndReset();
       msPerSample = t.gpuMs / (static_cast<double>(n) * k);
 
@@ -253,6 +256,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
     }
     samples += k;
     ++passes;
+    lastPassMs = passMs;
     // Decisions start once every pixel has min_spp samples (two passes of half each).
     if (settings.noiseThreshold > 0.0 && samples >= static_cast<std::uint32_t>(settings.minSpp))
       open = acc.stillOpen(open, settings.noiseThreshold);
@@ -260,6 +264,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   result.image = acc.image();
   result.pixels = acc.stats();
   result.progressive = summarize(result.pixels, passes);
+  result.progressive.lastPassMs = lastPassMs;
   // Converged: closed by the threshold before the cap (without one, every pixel counts).
   if (settings.noiseThreshold > 0.0)
     result.progressive.converged = 1.0 - static_cast<double>(open.size()) / totalPixels;

@@ -1,0 +1,273 @@
+// Progressive rendering (host/render/adaptive.h): the error estimate's arithmetic and the pass
+// schedule on the host; on the kernel, that the estimate is calibrated against a many-sample
+// reference, that a noise threshold reaches its target with fewer rays than uniform sampling, is
+// deterministic and keeps its cap, and that a time limit holds.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+
+#include <gtest/gtest.h>
+
+#include "render/adaptive.h"
+#include "test_support.h"
+#include "util/error.h"
+
+namespace vkray::test {
+namespace {
+
+// ---- Host: the estimate and the schedule ----------------------------------------------------
+
+PixelMoments moments(const std::vector<double>& earlier, const std::vector<double>& last) {
+  PixelMoments m;
+  for (double v : earlier) m.sum += glm::dvec3(v), m.squares += glm::dvec3(v * v), m.samples += 1;
+  m.earlierSum = m.sum;
+  m.earlierSamples = m.samples;
+  for (double v : last) m.sum += glm::dvec3(v), m.squares += glm::dvec3(v * v), m.samples += 1;
+  return m;
+}
+
+TEST(Progressive, SplitHalfErrorIsTheDifferenceOfTheHalvesMeansOverTwo) {
+  // A = 0.25 (4 samples), B = 0.75 (4 samples): |A - B| sqrt(4 * 4) / 8 = 0.25.
+  PixelMoments m = moments({0, 0.5, 0, 0.5}, {1, 0.5, 1, 0.5});
+  EXPECT_DOUBLE_EQ(standardError(m), 0.25);
+  // Unequal parts, n1 = 2, n2 = 6: |A - B| sqrt(12) / 8.
+  PixelMoments u = moments({1, 1}, {0, 0, 0, 0, 0, 0});
+  EXPECT_NEAR(standardError(u), std::sqrt(12.0) / 8.0, 1e-15);
+}
+
+TEST(Progressive, OnePassErrorIsTheSampleVarianceOverN) {
+  // Samples 0, 1, 0, 1: unbiased variance 1/3, standard error sqrt(1/3 / 4).
+  PixelMoments m = moments({}, {0, 1, 0, 1});
+  EXPECT_NEAR(standardError(m), std::sqrt(1.0 / 12.0), 1e-15);
+  EXPECT_TRUE(std::isinf(standardError(moments({}, {0.5}))));
+  EXPECT_EQ(standardError(moments({0.5, 0.5}, {0.5, 0.5})), 0.0);
+}
+
+TEST(Progressive, ErrorIsTheLargestChannels) {
+  PixelMoments m = moments({0, 0}, {0, 0});
+  m.sum.g = 2.0; // the last pass's green mean is 1, the earlier one's 0
+  EXPECT_DOUBLE_EQ(standardError(m), 0.5);
+}
+
+TEST(Progressive, NeighbourhoodDecidesWhoStaysOpen) {
+  ProgressiveImage img(5, 1);
+  // Pixels 0..4 with two passes each; pixel 2 noisy (error 0.5), the others exact.
+  for (std::uint32_t x = 0; x < 5; ++x) {
+    img.add(x, 0, glm::vec4(x == 2 ? 0.0f : 1.0f, 0, 0, 2), glm::vec4(0));
+    img.add(x, 0, glm::vec4(x == 2 ? 4.0f : 1.0f, 0, 0, 2), glm::vec4(0));
+  }
+  EXPECT_DOUBLE_EQ(img.error(2, 0), 1.0);                               // A = 0, B = 2: |0 - 2| sqrt(4) / 4 = 1
+  EXPECT_DOUBLE_EQ(img.neighbourhoodError(1, 0), std::sqrt(1.0 / 3.0)); // RMS of 0, 0, 1
+  std::vector<std::uint32_t> all{0, 1, 2, 3, 4};
+  // At 0.6 pixel 2's neighbours (0.577) close, pixel 2 (0.577 too: it sits between two exact ones)
+  // as well; at 0.5 the three middle pixels stay open.
+  EXPECT_TRUE(img.stillOpen(all, 0.6).empty());
+  EXPECT_EQ(img.stillOpen(all, 0.5), (std::vector<std::uint32_t>{1, 2, 3}));
+  // Only pixels open before can stay open.
+  EXPECT_EQ(img.stillOpen({2}, 0.5), (std::vector<std::uint32_t>{2}));
+}
+
+TEST(Progressive, ThresholdScheduleDoublesUpToTheCap) {
+  RenderSettings s;
+  s.noiseThreshold = 0.01;
+  s.minSpp = 16;
+  s.maxSpp = 100;
+  std::vector<std::uint32_t> passes;
+  std::uint32_t n = 0;
+  while (std::uint32_t k = nextPassSamples(s, n, 10, 0.0, 0.0)) passes.push_back(k), n += k;
+  EXPECT_EQ(passes, (std::vector<std::uint32_t>{8, 8, 16, 32, 36}));
+  EXPECT_EQ(nextPassSamples(s, 16, 0, 0.0, 0.0), 0u); // nothing open
+}
+
+TEST(Progressive, TimeLimitShortensThePassToWhatIsLeft) {
+  RenderSettings s;
+  s.timeLimit = 1.0;                                    // 1000 ms
+  EXPECT_EQ(nextPassSamples(s, 0, 1000, 0.0, 0.0), 1u); // the first pass measures
+  // 0.01 ms per pixel-sample, 1000 pixels: 10 ms per sample of each; 100 ms spent, 900 ms left.
+  EXPECT_EQ(nextPassSamples(s, 1, 1000, 0.01, 100.0), 1u);   // doubling asks for 1
+  EXPECT_EQ(nextPassSamples(s, 64, 1000, 0.01, 100.0), 64u); // 90 fit
+  EXPECT_EQ(nextPassSamples(s, 128, 1000, 0.01, 100.0), 90u);
+  EXPECT_EQ(nextPassSamples(s, 128, 1000, 0.01, 995.0), 0u); // not one sample fits
+}
+
+TEST(Progressive, PixelStatisticsAloneTraceSppInTwoHalves) {
+  RenderSettings s;
+  s.spp = 9;
+  EXPECT_EQ(nextPassSamples(s, 0, 10, 0.0, 0.0), 4u);
+  EXPECT_EQ(nextPassSamples(s, 4, 10, 0.0, 0.0), 5u);
+  EXPECT_EQ(nextPassSamples(s, 9, 10, 0.0, 0.0), 0u);
+}
+
+TEST(Progressive, BadCombinationsAreRefused) {
+  RenderSettings s;
+  s.noiseThreshold = 0.01;
+  s.minSpp = 64;
+  s.maxSpp = 32;
+  EXPECT_THROW(checkProgressiveSettings(s), InputError);
+  s.minSpp = 16;
+  EXPECT_NO_THROW(checkProgressiveSettings(s));
+  s.antialiasing = Antialiasing::Adaptive;
+  s.spp = 4;
+  EXPECT_THROW(checkProgressiveSettings(s), InputError);
+}
+
+// ---- The kernel ----------------------------------------------------------------------------
+
+// Noise of three kinds: a sphere's silhouette against the sky (edges), a tight Phong highlight
+// (glossy), and a glass sphere in front of a checkered floor (refraction). Small, so a many-sample
+// reference stays cheap on lavapipe.
+Scene noisyScene() {
+  Scene s = sceneFromJson(R"({
+    "camera": { "position": [0, 1.2, 5], "look_at": [0, 0.6, 0], "fov_y": 40 },
+    "image": { "width": 96, "height": 72 }, "background": [0.3, 0.4, 0.6], "ambient": [0.2, 0.2, 0.2],
+    "render": { "max_depth": 4 },
+    "lights": [ { "position": [3, 5, 4], "color": [1, 1, 1] } ],
+    "materials": {
+      "floor": { "color": [0.8, 0.8, 0.8], "diffuse": 0.8, "checker": { "color2": [0.1, 0.1, 0.1], "scale": 0.5 } },
+      "shiny": { "color": [0.8, 0.2, 0.2], "diffuse": 0.6, "specular": 0.9, "shininess": 400 },
+      "glass": { "color": [1, 1, 1], "ambient": 0, "diffuse": 0, "transmission": 0.9, "ior": 1.5 } },
+    "objects": [
+      { "type": "plane", "normal": [0, 1, 0], "offset": 0, "material": "floor" },
+      { "type": "sphere", "center": [-1.1, 0.7, 0], "radius": 0.7, "material": "shiny" },
+      { "type": "sphere", "center": [0.9, 0.7, 0.5], "radius": 0.7, "material": "glass" } ] })");
+  return s;
+}
+
+Image uniform(Scene s, int spp) {
+  s.render.spp = spp;
+  return render(s).image;
+}
+
+double maxChannelDiff(const glm::vec3& a, const glm::vec3& b) {
+  glm::vec3 d = glm::abs(a - b);
+  return std::max({d.x, d.y, d.z});
+}
+
+double percentile(std::vector<double> v, double q) {
+  std::sort(v.begin(), v.end());
+  return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
+}
+
+// The 1024-sample reference, once per process.
+const Image& reference() {
+  static const Image ref = uniform(noisyScene(), 1024);
+  return ref;
+}
+
+TEST(RenderProgressive, ErrorEstimateIsCalibratedAgainstAReference) {
+  // Per-pixel statistics at 64 spp (two halves of 32): over the pixels that have noise at all,
+  // the RMS of the estimated standard error against the RMS of the actual deviation from the
+  // 1024-sample reference (whose own error is a quarter of the 64-sample one's and shares its first
+  // 64 samples, so the deviation is if anything understated).
+  Scene s = noisyScene();
+  s.render.spp = 64;
+  RenderOptions o;
+  o.pixelStats = true;
+  RenderResult r = render(s, o);
+  ASSERT_EQ(r.pixels.error.size(), r.image.pixels.size());
+  const Image& ref = reference();
+  double est2 = 0.0, dev2 = 0.0;
+  int noisy = 0;
+  for (std::size_t i = 0; i < ref.pixels.size(); ++i) {
+    const double dev = maxChannelDiff(r.image.pixels[i], ref.pixels[i]);
+    const double est = r.pixels.error[i];
+    if (est < 1e-6 && dev < 1e-6) continue; // no noise: nothing to calibrate
+    est2 += est * est;
+    dev2 += dev * dev;
+    ++noisy;
+  }
+  ASSERT_GT(noisy, 100);
+  const double ratio = std::sqrt(est2 / dev2);
+  // A split-half estimate has one degree of freedom per channel and pixel; over hundreds of pixels
+  // the RMS agrees within a factor 2 either way (measured: see the log line).
+  std::printf("calibration: %d noisy pixels, RMS estimate / RMS deviation = %.3f\n", noisy, ratio);
+  EXPECT_GT(ratio, 0.5);
+  EXPECT_LT(ratio, 2.0);
+  for (float spp : r.pixels.samples) EXPECT_EQ(spp, 64.0f);
+}
+
+TEST(RenderProgressive, PixelStatisticsDoNotChangeTheImage) {
+  // The progressive path at a fixed spp traces the same samples as a uniform render: the same
+  // image up to the order of float additions (the host adds two halves in double).
+  Scene s = noisyScene();
+  s.render.spp = 8;
+  Image plain = render(s).image;
+  RenderOptions o;
+  o.pixelStats = true;
+  RenderResult r = render(s, o);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < plain.pixels.size(); ++i)
+    worst = std::max(worst, maxChannelDiff(plain.pixels[i], r.image.pixels[i]));
+  EXPECT_LT(worst, 1e-5);
+  double rays = std::accumulate(r.pixels.rays.begin(), r.pixels.rays.end(), 0.0);
+  EXPECT_EQ(rays, static_cast<double>(r.stats.total())); // the per-pixel counts add up
+}
+
+TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) {
+  const double threshold = 0.004;
+  Scene s = noisyScene();
+  s.render.noiseThreshold = threshold;
+  s.render.minSpp = 8;
+  s.render.maxSpp = 512;
+  RenderResult a = render(s);
+  const Image& ref = reference();
+  std::vector<double> errors;
+  for (std::size_t i = 0; i < ref.pixels.size(); ++i)
+    errors.push_back(maxChannelDiff(a.image.pixels[i], ref.pixels[i]));
+  const double p95 = percentile(errors, 0.95);
+  // The threshold bounds the neighbourhood's mean estimated standard error; the 95th percentile of
+  // the actual error (a max over three channels, about two standard errors) stays within 3 E.
+  EXPECT_LT(p95, 3.0 * threshold);
+  for (float n : a.pixels.samples) {
+    EXPECT_GE(n, 8.0f);   // min_spp
+    EXPECT_LE(n, 512.0f); // the cap
+  }
+  EXPECT_GT(a.progressive.passes, 2);
+  EXPECT_GT(a.progressive.converged, 0.5);
+
+  // Uniform sampling needs more rays for the same 95th percentile: between the two powers of two
+  // whose 95th percentiles bracket it, interpolated in log-log (error ~ spp^-a).
+  double uniformRays = 0.0;
+  double previousP95 = 0.0, previousRays = 0.0;
+  for (int spp = 8; spp <= 512; spp *= 2) {
+    Scene u = noisyScene();
+    u.render.spp = spp;
+    RenderResult ur = render(u);
+    std::vector<double> ue;
+    for (std::size_t i = 0; i < ref.pixels.size(); ++i) ue.push_back(maxChannelDiff(ur.image.pixels[i], ref.pixels[i]));
+    const double up95 = percentile(ue, 0.95), rays = static_cast<double>(ur.stats.total());
+    if (up95 <= p95) {
+      const double t = previousP95 > 0.0 ? std::log(previousP95 / p95) / std::log(previousP95 / up95) : 1.0;
+      uniformRays = previousP95 > 0.0 ? std::exp(std::log(previousRays) + t * std::log(rays / previousRays)) : rays;
+      break;
+    }
+    previousP95 = up95;
+    previousRays = rays;
+  }
+  std::printf("threshold %g: p95 error %.4f, %llu rays; uniform at the same p95: %.0f rays (ratio %.2f)\n", threshold,
+              p95, static_cast<unsigned long long>(a.stats.total()), uniformRays,
+              static_cast<double>(a.stats.total()) / uniformRays);
+  ASSERT_GT(uniformRays, 0.0);
+  EXPECT_LT(static_cast<double>(a.stats.total()), uniformRays);
+
+  // Deterministic: the same image and sample counts again.
+  RenderResult again = render(s);
+  EXPECT_EQ(again.image.pixels, a.image.pixels);
+  EXPECT_EQ(again.pixels.samples, a.pixels.samples);
+}
+
+TEST(RenderProgressive, TimeLimitHoldsWithinOnePass) {
+  Scene s = noisyScene();
+  s.render.timeLimit = 0.25; // seconds of GPU time
+  s.render.maxSpp = 4096;
+  RenderResult r = render(s);
+  EXPECT_GE(r.progressive.passes, 2);
+  // The passes stop before the budget would be exceeded at the measured speed: the whole trace
+  // stays within the budget plus the last pass.
+  EXPECT_LE(r.timings.traceMs, 250.0 + r.progressive.lastPassMs);
+  EXPECT_GT(r.progressive.sppMean, 1.0);
+}
+
+} // namespace
+} // namespace vkray::test
