@@ -95,6 +95,41 @@ TEST_F(Cli, RendersAPngWithStatistics) {
   EXPECT_GT(std::stod(stats["rays per second"]), 0.0);
 }
 
+// Progressive rendering through the command line: --stats says what the noise threshold reached,
+// and the same command writes the same bytes again (the passes are deterministic).
+TEST_F(Cli, NoiseThresholdPrintsWhatItReachedAndIsDeterministic) {
+  fs::path a = dir_ / "a.pfm", b = dir_ / "b.pfm";
+  const std::string flags = "' --width 48 --height 36 --noise-threshold 0.01 --min-spp 8 --max-spp 64 --stats";
+  RunResult r = vkray("render '" + scene("showcase.json") + "' -o '" + a.string() + flags + " --validate");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  std::map<std::string, std::string> stats;
+  std::istringstream lines(r.out);
+  for (std::string line; std::getline(lines, line);) {
+    auto colon = line.find(": ");
+    if (colon != std::string::npos) stats[line.substr(0, colon)] = line.substr(colon + 2);
+  }
+  EXPECT_EQ(stats["noise threshold"], "0.01");
+  EXPECT_EQ(stats["spp"].rfind("mean ", 0), 0u) << stats["spp"];
+  EXPECT_NE(stats["spp"].find("(min 8, cap 64)"), std::string::npos) << stats["spp"];
+  EXPECT_GE(std::stoi(stats["passes"]), 2);
+  EXPECT_EQ(stats["error estimate"].rfind("mean ", 0), 0u);
+  EXPECT_NE(stats["converged pixels"].find(" %"), std::string::npos);
+  EXPECT_NE(stats["trace"].find(" ms"), std::string::npos);
+  ASSERT_EQ(vkray("render '" + scene("showcase.json") + "' -o '" + b.string() + flags).exitCode, 0);
+  EXPECT_EQ(slurp(a), slurp(b));
+}
+
+TEST_F(Cli, TimeLimitPrintsItsBudget) {
+  fs::path out = dir_ / "t.png";
+  RunResult r = vkray("render '" + scene("showcase.json") + "' -o '" + out.string() +
+                      "' --width 48 --height 36 --time-limit 0.2 --stats");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("time limit: 0.2 s\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("passes: "), std::string::npos);
+  EXPECT_TRUE(fs::exists(out));
+}
+
 TEST_F(Cli, WritesLinearPfm) {
   fs::path out = dir_ / "a.pfm";
   RunResult r = vkray("render '" + scene("showcase.json") + "' -o '" + out.string() + "' --width 16 --height 8 -q");

@@ -276,6 +276,9 @@ const MalformedScene kMalformedScenes[] = {
     {"huge-integer.json", "huge-integer.json: image.width: must be in [1, 16384], got 1e+20"},
     {"absurd-spp.json", "absurd-spp.json: render.spp: must be in [1, 4096], got 1000000"},
     {"absurd-depth.json", "absurd-depth.json: render.max_depth: must be in [0, 64], got 100000"},
+    {"noise-threshold-zero.json", "noise-threshold-zero.json: render.noise_threshold: must be > 0 (a standard error in "
+                                  "linear RGB), got 0"},
+    {"time-limit-negative.json", "time-limit-negative.json: render.time_limit: must be in [0, 604800], got -1"},
     {"empty.json", "empty.json:1:1: invalid JSON: syntax error while parsing value - unexpected end of input"},
     {"null.json", "null.json: (top level): must be an object, got null"},
     {"garbage.bin", "garbage.bin:1:1: invalid JSON: syntax error while parsing value - invalid literal"},
@@ -374,6 +377,17 @@ TEST_F(CliHardening, FlagsBeyondTheCapsAreRefused) {
       {{"--adaptive-threshold", "-0.1"}, "vkray: error: --adaptive-threshold: Value -0.1 not in range 0 to 1\n"},
       {{"--bailout", "half"}, "vkray: error: --bailout: Value half is not a number\n"},
       {{"--spp", "many"}, "vkray: error: --spp: Value many not in range 1 to 4096\n"},
+      {{"--noise-threshold", "0"}, "vkray: error: --noise-threshold: Value 0 must be > 0 and at most 1e+06\n"},
+      {{"--noise-threshold", "-0.01"}, "vkray: error: --noise-threshold: Value -0.01 must be > 0 and at most 1e+06\n"},
+      {{"--noise-threshold", "nan"}, "vkray: error: --noise-threshold: Value nan must be > 0 and at most 1e+06\n"},
+      {{"--time-limit", "0"}, "vkray: error: --time-limit: Value 0 must be > 0 and at most 604800\n"},
+      {{"--time-limit", "-5"}, "vkray: error: --time-limit: Value -5 must be > 0 and at most 604800\n"},
+      {{"--max-spp", "0"}, "vkray: error: --max-spp: Value 0 not in range 1 to 4096\n"},
+      {{"--noise-threshold", "0.01", "--min-spp", "64", "--max-spp", "32"},
+       "vkray: error: render.min_spp: must not exceed max_spp (32), got 64\n"},
+      {{"--noise-threshold", "0.01", "--spp", "4", "--aa", "adaptive"},
+       "vkray: error: render.antialiasing: \"adaptive\" cannot be combined with a noise threshold, a time limit or "
+       "the spp, error and rays AOVs (they sample progressively): use one\n"},
   };
   fs::path out = dir_ / "out" / "image.png";
   for (const auto& c : cases) {
