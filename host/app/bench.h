@@ -60,4 +60,18 @@ struct BenchAccuracyArgs {
 // Error against time for every accuracy knob (docs/accuracy.md).
 int runBenchAccuracy(const BenchAccuracyArgs& args);
 
+struct BenchAdaptiveArgs {
+  std::vector<std::filesystem::path> scenes; // default: showcase, glass, seed, textured
+  DeviceFlags device;
+  int runs = 5;
+  std::uint32_t height = 180;
+  int referenceSpp = 1024;
+  std::vector<double> thresholds{0.008, 0.004, 0.002, 0.001};
+  int minSpp = 16, maxSpp = 1024;             // the thresholds' min_spp and max_spp
+  int minUniformSpp = 4, maxUniformSpp = 256; // uniform sampling at the powers of two between
+};
+
+// A noise threshold against uniform sampling at equal 95th-percentile error (docs/accuracy.md).
+int runBenchAdaptive(const BenchAdaptiveArgs& args);
+
 } // namespace vkray

@@ -148,6 +148,28 @@ int main(int argc, char** argv) {
   benchAccCmd->add_flag("--quick", benchAcc.quick, "tiny images and few points (seconds)");
   addDeviceFlags(*benchAccCmd, benchAcc.device);
 
+  BenchAdaptiveArgs benchAdaptive;
+  auto* benchAdaptiveCmd = benchCmd->add_subcommand(
+      "adaptive", "a noise threshold against uniform sampling: time to the same 95th-percentile error");
+  benchAdaptiveCmd->add_option("scenes", benchAdaptive.scenes,
+                               "scene files (default: showcase, glass, seed, textured)");
+  benchAdaptiveCmd->add_option("--runs", benchAdaptive.runs, "timed runs per point, interleaved")
+      ->check(CLI::Range(1, 1000));
+  benchAdaptiveCmd->add_option("--height", benchAdaptive.height, "image height (aspect kept)")
+      ->check(CLI::Range(8, 4096));
+  benchAdaptiveCmd->add_option("--reference-spp", benchAdaptive.referenceSpp, "samples per pixel of the reference")
+      ->check(CLI::Range(1, 4096));
+  benchAdaptiveCmd->add_option("--thresholds", benchAdaptive.thresholds, "noise thresholds, comma-separated")
+      ->delimiter(',')
+      ->check(positiveReal(1e6));
+  benchAdaptiveCmd->add_option("--min-spp", benchAdaptive.minSpp, "the thresholds' min_spp")
+      ->check(CLI::Range(1, 4096));
+  benchAdaptiveCmd->add_option("--max-spp", benchAdaptive.maxSpp, "the thresholds' max_spp")
+      ->check(CLI::Range(1, 4096));
+  benchAdaptiveCmd->add_option("--max-uniform-spp", benchAdaptive.maxUniformSpp, "largest uniform point")
+      ->check(CLI::Range(1, 4096));
+  addDeviceFlags(*benchAdaptiveCmd, benchAdaptive.device);
+
   DeviceFlags infoFlags;
   auto* infoCmd = app.add_subcommand("info", "list Vulkan devices and the features vkray uses");
   infoCmd->add_option("--device", infoFlags.device, "also create a context on this device")->envname("VKRAY_DEVICE");
@@ -169,6 +191,7 @@ int main(int argc, char** argv) {
     if (*viewCmd) return runView(view);
     if (*benchTimeCmd) return runBenchTime(benchTime);
     if (*benchAccCmd) return runBenchAccuracy(benchAcc);
+    if (*benchAdaptiveCmd) return runBenchAdaptive(benchAdaptive);
     if (*benchMeshesCmd) return runBenchMeshes(benchMeshes);
     if (*benchSpecCmd) return runBenchSpecialize(benchSpec);
     if (*benchViewCmd) return runBenchView(benchView);
