@@ -273,23 +273,26 @@ void listPass() {
   uvec2 pixel = uvec2(imageLoad(prevTexels, int(entry)).xy);
   uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
   uint count = opaqueUniform(pc.sampleCount);
-  vec3 sum = vec3(0.0);
-  vec3 squares = vec3(0.0);
+  // The sums start from the entry's earlier dispatches of this pass: each sample is added to the
+  // running sum one at a time, whether the host gave a dispatch one sample or several, so the
+  // float rounding (and the image) does not depend on how the host split the pass.
+  vec4 first = vec4(0.0);
+  vec4 second = vec4(0.0);
+  if ((opaqueUniform(pc.flags) & kFlagAccumulate) != 0u) {
+    first = imageLoad(imageTexels, int(2u * entry));
+    second = imageLoad(imageTexels, int(2u * entry + 1u));
+  }
   uint k = 0u;
   while (true) { // tested at the bottom, as in sampleSum
     vec3 radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)));
-    sum += radiance;
-    squares += radiance * radiance;
+    first.rgb += radiance;
+    second.rgb += radiance * radiance;
     ++k;
     if (k >= count) break;
   }
   uint rays = COUNT_STATS ? gCount.eyeRays + gCount.shadowRays + gCount.reflectionRays + gCount.refractionRays : 0u;
-  vec4 first = vec4(sum, float(count));
-  vec4 second = vec4(squares, float(rays));
-  if ((opaqueUniform(pc.flags) & kFlagAccumulate) != 0u) {
-    first += imageLoad(imageTexels, int(2u * entry));
-    second += imageLoad(imageTexels, int(2u * entry + 1u));
-  }
+  first.w += float(count);
+  second.w += float(rays);
   imageStore(imageTexels, int(2u * entry), first);
   imageStore(imageTexels, int(2u * entry + 1u), second);
 }

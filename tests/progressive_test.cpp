@@ -80,6 +80,17 @@ TEST(Progressive, ThresholdScheduleDoublesUpToTheCap) {
   EXPECT_EQ(nextPassSamples(s, 16, 0, 0.0, 0.0), 0u); // nothing open
 }
 
+TEST(Progressive, DecisionsFollowTheSchedule) {
+  RenderSettings s;
+  EXPECT_EQ(decisionCount(s), 0u); // no threshold, no decisions
+  s.noiseThreshold = 0.01;
+  s.minSpp = 16;
+  s.maxSpp = 1024;
+  EXPECT_EQ(decisionCount(s), 7u); // after 16, 32, 64, 128, 256, 512, 1024 samples
+  s.maxSpp = 16;
+  EXPECT_EQ(decisionCount(s), 1u);
+}
+
 TEST(Progressive, TimeLimitShortensThePassToWhatIsLeft) {
   RenderSettings s;
   s.timeLimit = 1.0;                                    // 1000 ms
@@ -255,6 +266,35 @@ TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) 
   RenderResult again = render(s);
   EXPECT_EQ(again.image.pixels, a.image.pixels);
   EXPECT_EQ(again.pixels.samples, a.pixels.samples);
+}
+
+TEST(RenderProgressive, TilesUnderAThresholdMergeIntoTheWholeRender) {
+  // Each tile traces a margin of rows for its neighbours' decisions, so its rows are the whole
+  // render's bit for bit, sample counts included.
+  Scene s = noisyScene();
+  s.render.noiseThreshold = 0.01;
+  s.render.minSpp = 4;
+  s.render.maxSpp = 64;
+  RenderResult whole = render(s);
+  const std::uint32_t w = s.render.width, h = s.render.height;
+  for (auto [begin, end] : {std::pair<std::uint32_t, std::uint32_t>{0, 25}, {25, 50}, {50, h}}) {
+    RenderOptions o;
+    o.rowBegin = begin;
+    o.rowEnd = end;
+    RenderResult tile = render(s, o);
+    for (std::uint32_t y = 0; y < h; ++y) {
+      for (std::uint32_t x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * w + x;
+        if (y >= begin && y < end) {
+          ASSERT_EQ(tile.image.pixels[i], whole.image.pixels[i]) << x << ", " << y;
+          ASSERT_EQ(tile.pixels.samples[i], whole.pixels.samples[i]) << x << ", " << y;
+        } else {
+          ASSERT_EQ(tile.image.pixels[i], glm::vec3(0.0f)) << x << ", " << y;
+          ASSERT_EQ(tile.pixels.samples[i], 0.0f);
+        }
+      }
+    }
+  }
 }
 
 TEST(RenderProgressive, TimeLimitHoldsWithinOnePass) {

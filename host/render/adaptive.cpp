@@ -138,6 +138,18 @@ std::uint32_t nextPassSamples(const RenderSettings& s, std::uint32_t samplesSoFa
   return k;
 }
 
+std::uint32_t decisionCount(const RenderSettings& s) {
+  if (!(s.noiseThreshold > 0.0)) return 0;
+  RenderSettings noLimit = s;
+  noLimit.timeLimit = 0.0;
+  std::uint32_t samples = 0, decisions = 0;
+  while (std::uint32_t k = nextPassSamples(noLimit, samples, 1, 0.0, 0.0)) {
+    samples += k;
+    if (samples >= static_cast<std::uint32_t>(s.minSpp)) ++decisions;
+  }
+  return decisions;
+}
+
 ProgressiveSummary summarize(const PixelStats& stats, int passes) {
   ProgressiveSummary p;
   p.passes = passes;

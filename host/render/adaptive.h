@@ -81,6 +81,10 @@ private:
 std::uint32_t nextPassSamples(const RenderSettings& settings, std::uint32_t samplesSoFar, std::size_t openPixels,
                               double msPerSample, double spentMs);
 
+// How many times a render with these settings decides which pixels stay open (at most): with a
+// time limit the passes may stop sooner.
+std::uint32_t decisionCount(const RenderSettings& settings);
+
 // The summary --stats prints, over the pixels rendered (converged: 1; the renderer knows better).
 ProgressiveSummary summarize(const PixelStats& stats, int passes);
 

@@ -163,10 +163,19 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   const std::uint32_t width = settings.width;
   const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
   const std::uint32_t rowBegin = std::min(options.rowBegin, rowEnd);
+  // A tile under a noise threshold also traces a margin of rows on each side: a pixel's decision
+  // reads its neighbours', whose decisions read theirs, so a difference at the margin's outer edge
+  // (a neighbour not traced) moves one row inward per decision. With a margin as wide as there are
+  // decisions, the tile's own rows decide as in the whole image, and tiles merge into exactly the
+  // whole render.
+  const bool tile = rowBegin > 0 || rowEnd < settings.height;
+  const std::uint32_t margin = settings.noiseThreshold > 0.0 && tile ? decisionCount(settings) : 0;
+  const std::uint32_t traceBegin = rowBegin > margin ? rowBegin - margin : 0;
+  const std::uint32_t traceEnd = std::min(settings.height, rowEnd + margin);
   ProgressiveImage acc(width, settings.height);
   std::vector<std::uint32_t> open;
-  open.reserve(static_cast<std::size_t>(width) * (rowEnd - rowBegin));
-  for (std::uint32_t y = rowBegin; y < rowEnd; ++y)
+  open.reserve(static_cast<std::size_t>(width) * (traceEnd - traceBegin));
+  for (std::uint32_t y = traceBegin; y < traceEnd; ++y)
     for (std::uint32_t x = 0; x < width; ++x) open.push_back(y * width + x);
   const double totalPixels = static_cast<double>(open.size());
 
@@ -263,11 +272,21 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   }
   result.image = acc.image();
   result.pixels = acc.stats();
+  // The margin's rows are not the tile's: black, and no statistics, as outside any tile.
+  auto outside = [&](std::size_t i) { return i / width < rowBegin || i / width >= rowEnd; };
+  for (std::size_t i = 0; i < result.image.pixels.size(); ++i) {
+    if (!outside(i)) continue;
+    result.image.pixels[i] = glm::vec3(0.0f);
+    result.pixels.samples[i] = result.pixels.error[i] = result.pixels.rays[i] = 0.0f;
+  }
   result.progressive = summarize(result.pixels, passes);
   result.progressive.lastPassMs = lastPassMs;
   // Converged: closed by the threshold before the cap (without one, every pixel counts).
-  if (settings.noiseThreshold > 0.0)
-    result.progressive.converged = 1.0 - static_cast<double>(open.size()) / totalPixels;
+  if (settings.noiseThreshold > 0.0) {
+    auto stillOpen = std::count_if(open.begin(), open.end(), [&](std::uint32_t i) { return !outside(i); });
+    result.progressive.converged =
+        1.0 - static_cast<double>(stillOpen) / (static_cast<double>(width) * (rowEnd - rowBegin));
+  }
 }
 
 void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, const RenderSettings& settings,
