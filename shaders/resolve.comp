@@ -11,11 +11,16 @@
 layout(local_size_x = kResolveGroupX, local_size_x_id = kResolveSpecGroupX, local_size_y = 1, local_size_z = 1) in;
 
 layout(constant_id = kResolveSpecEncodeSrgb) const bool ENCODE_SRGB = true;
+layout(constant_id = kResolveSpecDisplay) const uint DISPLAY = kDisplayImage;
+layout(constant_id = kResolveSpecMapLow) const float MAP_LOW = 0.001;
+layout(constant_id = kResolveSpecMapHigh) const float MAP_HIGH = 0.1;
 
 // The Renderer's sums, read where they are: a storage texel buffer, which lavapipe reads with one
 // 16-byte load per lane inline (a storage-buffer read would be a per-lane loop per component, once
 // 80 % of this pass's time; copying them into a sampled image cost about 1 ms a frame).
 layout(binding = kResolveBindingSums, rgba32f) uniform readonly restrict imageBuffer sums;
+// The map's values (DISPLAY != kDisplayImage): float bits of the error estimates, or rays per pixel.
+layout(std430, binding = kResolveBindingMap) readonly restrict buffer MapValues { uint mapWords[]; };
 #ifdef VKRAY_RESOLVE_DIRECT
 // The swapchain image: no format named (shaderStorageImageWriteWithoutFormat), so one pipeline
 // writes BGRA and RGBA images alike; the store rounds to 8 bits.
@@ -51,6 +56,23 @@ vec3 linearToSrgb(vec3 v) {
   return mix(hi, 12.92 * v, lessThanEqual(v, vec3(0.0031308)));
 }
 
+// A heat colour for t in [0, 1]: black, blue, cyan, green, yellow, red, white at the stops
+// (linear RGB, as the image's colour before encoding).
+vec3 heat(float t) {
+  const vec3 stops[7] = vec3[7](vec3(0.0), vec3(0.0, 0.0, 1.0), vec3(0.0, 1.0, 1.0), vec3(0.0, 1.0, 0.0),
+                                vec3(1.0, 1.0, 0.0), vec3(1.0, 0.0, 0.0), vec3(1.0));
+  float x = clamp(t, 0.0, 1.0) * 6.0;
+  int k = min(int(x), 5);
+  return mix(stops[k], stops[k + 1], x - float(k));
+}
+
+// The map's value on its log scale: MAP_LOW at the bottom of the ramp's coloured part (blue, 1/6),
+// MAP_HIGH at its top (red, 5/6); zero is black, beyond the top whitens.
+vec3 mapColour(float value) {
+  float t = (log2(max(value, 1e-30)) - log2(MAP_LOW)) / (log2(MAP_HIGH) - log2(MAP_LOW));
+  return value > 0.0 ? heat(1.0 / 6.0 + t * (4.0 / 6.0)) : vec3(0.0);
+}
+
 void main() {
   // The image size comes from the image itself: no push constant decides a branch (lavapipe's
   // dispatch-time inlining of uniform values crashes on those, see docs/performance.md).
@@ -60,6 +82,9 @@ void main() {
   vec4 s = imageLoad(sums, pixel.y * size.x + pixel.x); // row-major, as wide as the image written
   // A pixel not traced yet (no samples) has a zero sum: black.
   vec3 rgb = pixelRadianceSum(s) / max(pixelSampleCount(s), 1.0);
+  uint i = uint(pixel.y * size.x + pixel.x);
+  if (DISPLAY == kDisplayError) rgb = mapColour(uintBitsToFloat(mapWords[i]));
+  if (DISPLAY == kDisplayCost) rgb = mapColour(float(mapWords[i]) / max(pixelSampleCount(s), 1.0));
   rgb = ENCODE_SRGB ? linearToSrgb(rgb) : clamp(rgb, 0.0, 1.0);
 #ifdef VKRAY_RESOLVE_DIRECT
   // ImGui blends in the swapchain's UNORM values, which hold sRGB-encoded colour: so does this.

@@ -19,6 +19,8 @@ layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_siz
 layout(binding = kBindingImage, rgba32f) uniform restrict imageBuffer imageTexels;
 layout(binding = kBindingPrevImage, rgba32f) uniform readonly restrict imageBuffer prevTexels;
 layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
+// Rays per pixel, summed over its samples (PIXEL_RAYS: the viewer's cost map).
+layout(std430, binding = kBindingPixelRays) restrict buffer PixelRaysBuffer { uint pixelRays[]; };
 layout(push_constant) uniform Push { PushConstants pc; };
 layout(constant_id = kSpecRefinePass) const bool REFINE_PASS = false;
 layout(constant_id = kSpecListPass) const bool LIST_PASS = false;
@@ -38,7 +40,7 @@ struct PendingRay {
 
 // Branch-free: on CPU drivers every branch costs as much as its body.
 void countRay(uint kind, uint depth) {
-  if (!COUNT_STATS) return;
+  if (!COUNT_RAYS) return;
   gCount.eyeRays += uint(kind == kRayEye);
   gCount.reflectionRays += uint(kind == kRayReflection);
   gCount.refractionRays += uint(kind == kRayRefraction);
@@ -331,8 +333,13 @@ void main() {
       bool center = (opaqueUniform(pc.flags) & kFlagCenterSample) != 0u;
       vec4 result = vec4(sampleSum(pixel, index, pc.sampleBase, opaqueUniform(pc.sampleCount), center),
                          float(pc.sampleCount));
-      if ((opaqueUniform(pc.flags) & kFlagAccumulate) != 0u) result += imageLoad(imageTexels, int(slot));
+      bool accumulate = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u;
+      if (accumulate) result += imageLoad(imageTexels, int(slot));
       imageStore(imageTexels, int(slot), result);
+      if (PIXEL_RAYS) {
+        uint rays = gCount.eyeRays + gCount.shadowRays + gCount.reflectionRays + gCount.refractionRays;
+        pixelRays[slot] = accumulate ? pixelRays[slot] + rays : rays;
+      }
     }
   }
   flushStats();

@@ -77,6 +77,12 @@ TEST(ViewSettings, AccumulationStopsAtTheCap) {
   EXPECT_EQ(acc.next(3, 8).count, 3u) << "raising the cap continues where it stopped";
 }
 
+TEST(ViewSettings, TheDisplayCyclesThroughTheImageAndItsMaps) {
+  EXPECT_EQ(nextDisplayMode(DisplayMode::Image), DisplayMode::Error);
+  EXPECT_EQ(nextDisplayMode(DisplayMode::Error), DisplayMode::Cost);
+  EXPECT_EQ(nextDisplayMode(DisplayMode::Cost), DisplayMode::Image);
+}
+
 TEST(ViewSettings, SwitchedOffEffectsAreCompiledOut) {
   Scene s = loadScene(scene("showcase.json"));
   Features all = analyzeScene(s, s.render);
@@ -423,6 +429,95 @@ TEST_F(Viewer, RayCountsFromASampleOfTheFramesMatchTheHeadlessCounts) {
   ASSERT_EQ(h.exitCode, 0) << h.err;
   const double perSample = statValue(h.out, "rays") / 40.0;
   EXPECT_NEAR(perFrame, perSample, 0.01 * perSample) << v.out << h.out;
+}
+
+// ---- Convergence figures and maps (viewer/convergence.h) -----------------------------------------
+
+// The split-half estimate of the final image's error (its last frame is measured): with more samples
+// the mean estimate falls and more pixels pass the threshold. The showcase's noise is at its edges
+// (antialiasing) and in its glossy highlights; with the stratified sequence it falls about as 1/n.
+TEST_F(Viewer, TheErrorFallsAndTheConvergedShareRisesAsSamplesAccumulate) {
+  double previousError = 1e30, firstConverged = -1.0, previousConverged = -1.0;
+  for (int frames : {4, 16, 64}) {
+    SCOPED_TRACE(frames);
+    RunResult r =
+        vkray("view '" + scene("showcase.json") + "' --width 64 --height 48 --no-ray-counts --frames " +
+              std::to_string(frames) + " --stats --validate --screenshot '" + (dir_ / "s.pfm").string() + "'");
+    ASSERT_EQ(r.exitCode, 0) << r.err;
+    EXPECT_EQ(r.err, "");
+    EXPECT_NE(r.out.find("noise threshold: 0.01 (default)\n"), std::string::npos) << r.out;
+    EXPECT_EQ(statValue(r.out, "error samples"), frames) << "the last frame is measured\n" << r.out;
+    const double error = statValue(r.out, "error mean");
+    const double converged = statValue(r.out, "converged");
+    EXPECT_GT(error, 0.0) << r.out;
+    EXPECT_LT(error, previousError) << r.out;
+    EXPECT_GE(converged, previousConverged) << r.out;
+    EXPECT_GE(statValue(r.out, "error p95"), error) << r.out;
+    if (firstConverged < 0) firstConverged = converged;
+    previousError = error;
+    previousConverged = converged;
+  }
+  EXPECT_GT(previousConverged, firstConverged + 1.0) << "percent converged at 64 against 4 samples";
+  EXPECT_GT(previousConverged, 50.0) << "most of the showcase is smooth at 64 samples";
+}
+
+// A view of one flat, unlit colour: every sample of every pixel is the same, so the estimate is 0 up
+// to the sums' rounding and every pixel has converged. Started in the error map (--display error),
+// whose screenshot holds the estimates; the window shows the map under the validation layer.
+TEST_F(Viewer, AFlatSceneHasNoErrorAndHasConvergedEverywhere) {
+  fs::path flat = dir_ / "flat.json";
+  writeText(flat, R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] }, "ambient": [1, 1, 1],
+      "materials": { "m": { "color": [0.3, 0.5, 0.7], "ambient": 1, "diffuse": 0, "specular": 0 } },
+      "objects": [ { "type": "plane", "normal": [0, 0, 1], "point": [0, 0, 0], "material": "m" } ] })");
+  fs::path shot = dir_ / "error.pfm";
+  RunResult r = vkray("view '" + flat.string() + "' --width 48 --height 32 --frames 8 --display error --stats " +
+                      "--validate --noise-threshold 0.001 --screenshot '" + shot.string() + "' --screenshot-window '" +
+                      (dir_ / "window.png").string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("display: error\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("noise threshold: 0.001\n"), std::string::npos) << r.out;
+  EXPECT_LT(statValue(r.out, "error mean"), 1e-6) << r.out;
+  EXPECT_EQ(statValue(r.out, "converged"), 100.0) << r.out;
+  Image errors = readImage(shot);
+  ASSERT_EQ(errors.width, 48u);
+  float worst = 0.0f;
+  for (const glm::vec3& p : errors.pixels) worst = std::max(worst, p.x);
+  EXPECT_LT(worst, 1e-5f) << "every pixel's estimate (and none missing, which reads +inf)";
+}
+
+// The cost map counts the rays each pixel traced (eye, shadow, reflection, refraction) per sample.
+// The left half of the view is a mirror, whose pixels also trace a reflection ray and the shadow ray
+// of what it shows (a lit wall behind the camera); the right half is a lit diffuse wall (an eye ray
+// and a shadow ray); above and below them the eye rays meet nothing: one ray per sample, exactly.
+TEST_F(Viewer, TheCostMapCountsRaysPerSample) {
+  fs::path file = dir_ / "mirror.json";
+  writeText(file, R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y": 40 },
+      "materials": { "mirror": { "color": [1, 1, 1], "diffuse": 0, "specular": 0, "reflection": 1 },
+                     "wall": { "color": [0.8, 0.8, 0.8] } },
+      "lights": [ { "type": "point", "position": [0, 1, 6] } ],
+      "objects": [
+        { "type": "polygon", "material": "mirror", "vertices": [[-2, -0.8, 0], [0, -0.8, 0], [0, 0.8, 0], [-2, 0.8, 0]] },
+        { "type": "polygon", "material": "wall", "vertices": [[0, -0.8, 0], [2, -0.8, 0], [2, 0.8, 0], [0, 0.8, 0]] },
+        { "type": "plane", "normal": [0, 0, -1], "point": [0, 0, 10], "material": "wall" } ] })");
+  fs::path shot = dir_ / "cost.pfm";
+  RunResult r = vkray("view '" + file.string() + "' --width 64 --height 48 --frames 4 --display cost --stats " +
+                      "--validate --screenshot '" + shot.string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("display: cost\n"), std::string::npos) << r.out;
+  Image cost = readImage(shot);
+  ASSERT_EQ(cost.width, 64u);
+  const float mirror = cost.at(16, 24).x, wall = cost.at(48, 24).x;
+  EXPECT_EQ(cost.at(0, 0).x, 1.0f) << "background: the eye ray alone";
+  EXPECT_EQ(cost.at(63, 47).x, 1.0f) << "background: the eye ray alone";
+  EXPECT_EQ(wall, 2.0f) << "the wall: the eye ray and the light's shadow ray";
+  EXPECT_GE(mirror, 3.0f) << "the mirror: the eye ray, its reflection and the reflected wall's shadow ray";
+  EXPECT_GT(mirror, wall);
+  // The same view shown as the image is still the headless render's.
+  Image viewed = view(file.string(), "--width 64 --height 48 --frames 4 --no-overlay", "image.pfm");
+  Image headless = render(file.string(), "--width 64 --height 48 --spp 4 --stats", "render.pfm");
+  expectBitIdentical(viewed, headless);
 }
 
 TEST_F(Viewer, PngScreenshotOfAGlassSceneEqualsTheHeadlessPng) {

@@ -37,6 +37,10 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
   cmd->add_option("--resize-to", a.resizeTo, "scripted: resize the window to WxH halfway through (tests)");
   cmd->add_option("--screenshot-window", a.windowScreenshot,
                   "scripted: also save the window as shown, overlay included (.png, .pfm or .exr)");
+  cmd->add_option("--display", a.display,
+                  "what the window shows at start (M cycles): the image, the estimated error per pixel or the rays "
+                  "traced per sample (cost), as heat maps; in a map, --screenshot holds its values")
+      ->check(CLI::IsMember(enumNameList<DisplayMode>()));
   addRenderFlags(*cmd, a.render);
   addKernelFlags(*cmd, a.kernel);
   addModelFlags(*cmd, a.model);
@@ -78,6 +82,7 @@ int runView(const ViewArgs& a) {
   o.spinDegrees = a.spin;
   o.printStats = a.stats;
   o.windowScreenshot = a.windowScreenshot;
+  o.display = parseEnum<DisplayMode>(a.display).value_or(DisplayMode::Image);
   if (!a.resizeTo.empty()) {
     unsigned w = 0, h = 0;
     char x = 0;

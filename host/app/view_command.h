@@ -32,6 +32,7 @@ struct ViewArgs {
   double spin = 0.0;
   std::string resizeTo; // WxH
   std::filesystem::path windowScreenshot;
+  std::string display = "image"; // image | error | cost
 };
 
 struct BenchViewArgs {

@@ -63,6 +63,7 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecCenterSample, centerSample);
   spec.set(gpu::kSpecRefinePass, refinePass);
   spec.set(gpu::kSpecListPass, listPass);
+  spec.set(gpu::kSpecPixelRays, o.pixelRays && !refinePass && !listPass);
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
   // pipeline keeps every count a runtime value.
   auto count = [&](std::size_t n) {
@@ -110,7 +111,8 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
     plan.quietSample = key(quiet, center, false);
   }
   if (adaptive) plan.refine = key(o, false, true);
-  plan.fill = o.cullRows && o.kernel == Kernel::Shade;
+  // Counting each pixel's rays needs every pixel traced: the fill writes no counts.
+  plan.fill = o.cullRows && !o.pixelRays && o.kernel == Kernel::Shade;
   plan.countStats = o.countStats;
   plan.entryPoints = f.useBvh && shape.hasBvh && o.entryPoints;
   return plan;

@@ -66,6 +66,10 @@ struct RenderOptions {
   // Keep per-pixel statistics (RenderResult::pixels): samples, estimated error and rays traced, as
   // the --aov layers `spp`, `error` and `rays` need. Renders progressively (host/render/adaptive.h).
   bool pixelStats = false;
+  // Progressive (viewer) sample passes also add each pixel's rays to a buffer (pixelRaysBuffer()), for
+  // the viewer's cost map; the rows row culling would fill are traced instead, so that every pixel
+  // is counted. A specialization: off, nothing of it is compiled.
+  bool pixelRays = false;
   std::function<void(const RenderProgress&)> progress;
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };

@@ -100,6 +100,8 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
   entryPoints_ = std::make_unique<vulkan::Buffer>(context, 2 * sizeof(glm::uvec4), vk::Format::eR32G32B32A32Uint,
                                                   vulkan::MemoryUse::DeviceLocal, "entry points (unused)",
                                                   vk::BufferUsageFlagBits::eStorageBuffer);
+  pixelRays_ = std::make_unique<vulkan::Buffer>(context, sizeof(std::uint32_t), vk::BufferUsageFlagBits::eStorageBuffer,
+                                                vulkan::MemoryUse::DeviceLocal, "rays per pixel (unused)");
 }
 
 Renderer::~Renderer() = default;
@@ -367,7 +369,8 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   }
   auto rows = static_cast<std::uint32_t>(std::min<std::uint64_t>(rowsFit, settings.height));
   // A progressive render lists its open pixels in the pass input (the refine pass's buffer).
-  ensureImageWindow(settings.width, rows, pixelTexels, adaptive || progressiveRender(settings, options));
+  ensureImageWindow(settings.width, rows, pixelTexels, adaptive || progressiveRender(settings, options),
+                    options.pixelRays);
   writeFrameParams(camera, settings, current_);
 }
 
@@ -385,7 +388,8 @@ void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t s
                  countRays ? kernels_.fill : kernels_.quietFill);
 }
 
-void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev) {
+void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev,
+                                 bool pixelRays) {
   bool rebuild = !image_ || imageWidth_ != width || imageRows_ != rows || imagePixelTexels_ != pixelTexels;
   if (rebuild) {
     vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width) * rows * pixelTexels * sizeof(glm::vec4);
@@ -414,6 +418,13 @@ void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::u
                                                     "entry points", vk::BufferUsageFlagBits::eStorageBuffer);
     rebuild = true;
   }
+  const vk::DeviceSize rayBytes = static_cast<vk::DeviceSize>(width) * rows * sizeof(std::uint32_t);
+  if (pixelRays && pixelRays_->size() < rayBytes) {
+    pixelRays_.reset();
+    pixelRays_ = std::make_unique<vulkan::Buffer>(context_, rayBytes, vk::BufferUsageFlagBits::eStorageBuffer,
+                                                  vulkan::MemoryUse::DeviceLocal, "rays per pixel");
+    rebuild = true;
+  }
   if (rebuild) updateDescriptors();
 }
 
@@ -433,6 +444,7 @@ void Renderer::updateDescriptors() {
     vk::Buffer handle = b == gpu::kBindingFrame         ? frameBuffer_->handle()
                         : b == gpu::kBindingStats       ? stats_->handle()
                         : b == gpu::kBindingEntryPoints ? entryPoints_->handle()
+                        : b == gpu::kBindingPixelRays   ? pixelRays_->handle()
                                                         : sceneBuffers_.at(b).handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
     writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, &infos[b]);
@@ -552,6 +564,13 @@ Image Renderer::readImage() const {
   Image img(frameWidth_, frameHeight_);
   readBandImage(*image_, 0, frameHeight_, img);
   return img;
+}
+
+std::vector<std::uint32_t> Renderer::readPixelRays() const {
+  std::vector<std::uint32_t> rays(static_cast<std::size_t>(frameWidth_) * frameHeight_);
+  if (pixelRays_->size() < rays.size() * sizeof(std::uint32_t)) throw Error("no rays per pixel were counted");
+  pixelRays_->read(rays.data(), rays.size() * sizeof(std::uint32_t));
+  return rays;
 }
 
 RayStats Renderer::takeStats() {

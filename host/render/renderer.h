@@ -59,8 +59,12 @@ public:
                      bool countRays = true);
   vk::Buffer imageBuffer() const;        // vec4(sum rgb, samples) per pixel, row-major
   vk::BufferView imageTexelView() const; // the same as RGBA32F texels (a storage texel buffer)
-  Image readImage() const;               // averages of the sums (after the recorded work completed)
-  RayStats takeStats();                  // reads and zeroes the counters
+  // options.pixelRays: rays traced per pixel, a uint per pixel summed over its samples like the
+  // image; a placeholder otherwise.
+  vk::Buffer pixelRaysBuffer() const { return pixelRays_->handle(); }
+  std::vector<std::uint32_t> readPixelRays() const; // after the recorded work completed
+  Image readImage() const;                          // averages of the sums (after the recorded work completed)
+  RayStats takeStats();                             // reads and zeroes the counters
   const Features& currentFeatures() const { return current_; }
   bool usesUniformScene() const { return memory_.scene; }
   bool usesUniformShading() const { return memory_.shading; }
@@ -77,7 +81,9 @@ private:
   // limit, per-pixel statistics.
   void renderProgressive(const RenderSettings& settings, const RenderOptions& options, RenderResult& result);
   // pixelTexels: RGBA32F texels per pixel of the window (2 for Kernel::Aov, else 1).
-  void ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev);
+  // pixelRays: a ray count per pixel of the window too (options.pixelRays).
+  void ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev,
+                         bool pixelRays = false);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
   void updateDescriptors();
   // fill: the background pipeline for rows that see nothing (row culling), or null to trace all.
@@ -116,6 +122,7 @@ private:
   std::unique_ptr<vulkan::Buffer> image_;       // window of imageRows_ rows
   std::unique_ptr<vulkan::Buffer> prevImage_;   // refine pass input (or a 16-byte placeholder)
   std::unique_ptr<vulkan::Buffer> entryPoints_; // two uvec4 per 8 x 8 tile of the window
+  std::unique_ptr<vulkan::Buffer> pixelRays_;   // a uint per pixel of the window (or a placeholder)
   std::uint32_t imageWidth_ = 0;
   std::uint32_t imageRows_ = 0;
   std::uint32_t imagePixelTexels_ = 1;

@@ -239,6 +239,29 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
   }
   if (!m.status.empty()) ImGui::TextWrapped("%s", m.status.c_str());
 
+  if (ImGui::CollapsingHeader("Convergence", ImGuiTreeNodeFlags_DefaultOpen)) {
+    // The split-half estimate of each pixel's standard error (convergence.h), linear, the largest of
+    // R, G and B; converged: the 3 x 3 neighbourhood's mean estimate is at most the threshold.
+    const ConvergenceFigures& c = m.convergence;
+    if (!c.measured) {
+      ImGui::TextDisabled("error: measuring...");
+    } else if (!c.estimated()) {
+      ImGui::TextDisabled("error: needs 2 samples/pixel");
+    } else {
+      ImGui::Text("error    mean %.2e  p95 %.2e", c.errorMean, c.errorP95);
+      ImGui::Text("converged %5.1f %% (at %u samples/pixel)", 100.0 * c.converged, c.samples);
+    }
+    ImGui::Text("threshold %.3g%s", m.noiseThreshold, m.defaultThreshold ? " (default; --noise-threshold)" : "");
+    comboEnum("display (M)", settings.display);
+    if (m.display == DisplayMode::Error) {
+      ImGui::TextWrapped("error map, log scale: blue %.1e .. red %.1e (threshold: green), black 0, "
+                         "white above or no estimate",
+                         m.noiseThreshold / 10.0, m.noiseThreshold * 10.0);
+    } else if (m.display == DisplayMode::Cost) {
+      ImGui::TextWrapped("cost map, rays per sample, log scale: blue %.0f .. red %.0f, white above", kCostMapLow,
+                         kCostMapHigh);
+    }
+  }
   if (ImGui::CollapsingHeader("Timing", ImGuiTreeNodeFlags_DefaultOpen)) {
     ImGui::Text("frame    %7.2f ms  (%.1f fps)", m.frameMs, m.frameMs > 0 ? 1000.0 / m.frameMs : 0.0);
     ImGui::Text("trace    %7.2f ms  GPU", m.traceMs);
@@ -302,6 +325,7 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
                            "wheel: zoom\n"
                            "F / Tab: fly mode; W A S D, Q E: move, shift: fast\n"
                            "R: reset camera   C: save camera JSON\n"
+                           "M: display image / error map / cost map\n"
                            "P / F12: screenshot   H / F1: overlay   Esc: quit");
   }
   ImGui::End();

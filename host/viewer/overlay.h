@@ -12,6 +12,7 @@
 
 #include "render/renderer.h"
 #include "viewer/camera_controller.h"
+#include "viewer/convergence.h"
 #include "viewer/device_image.h"
 #include "viewer/swapchain.h"
 #include "viewer/view_settings.h"
@@ -40,6 +41,10 @@ struct OverlayModel {
   CameraMode cameraMode = CameraMode::Orbit;
   std::string reloadError; // the scene file's last load error (the last good scene is shown)
   std::string status;      // the last action's result ("saved shot.png")
+  DisplayMode display = DisplayMode::Image;
+  double noiseThreshold = 0.0;   // convergence is judged at this threshold
+  bool defaultThreshold = false; // neither the scene nor --noise-threshold set it
+  ConvergenceFigures convergence;
 };
 
 // What the user asked for through the overlay's buttons this frame.

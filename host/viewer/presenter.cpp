@@ -22,19 +22,22 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
   const auto& device = context.device();
   vulkan::vulkanStep("creating the viewer's resolve pass", [&] {
     // The layer is read by the direct variant only.
-    std::array<vk::DescriptorSetLayoutBinding, 3> bindings{
+    std::array<vk::DescriptorSetLayoutBinding, 4> bindings{
         vk::DescriptorSetLayoutBinding(gpu::kResolveBindingSums, vk::DescriptorType::eStorageTexelBuffer, 1,
                                        vk::ShaderStageFlagBits::eCompute),
         vk::DescriptorSetLayoutBinding(gpu::kResolveBindingDisplay, vk::DescriptorType::eStorageImage, 1,
                                        vk::ShaderStageFlagBits::eCompute),
         vk::DescriptorSetLayoutBinding(gpu::kResolveBindingOverlay, vk::DescriptorType::eCombinedImageSampler, 1,
+                                       vk::ShaderStageFlagBits::eCompute),
+        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingMap, vk::DescriptorType::eStorageBuffer, 1,
                                        vk::ShaderStageFlagBits::eCompute)};
     setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
     vk::DescriptorSetLayout layouts[] = {*setLayout_};
     pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, {}));
-    std::array<vk::DescriptorPoolSize, 3> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 1),
+    std::array<vk::DescriptorPoolSize, 4> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 1),
                                                 vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 1),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 1)};
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 1),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, 1)};
     pool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
     vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*pool_, layouts));
@@ -44,6 +47,9 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
                                       vk::SamplerAddressMode::eClampToEdge, vk::SamplerAddressMode::eClampToEdge,
                                       vk::SamplerAddressMode::eClampToEdge));
   });
+  noMap_ = std::make_unique<vulkan::Buffer>(context, sizeof(std::uint32_t), vk::BufferUsageFlagBits::eStorageBuffer,
+                                            vulkan::MemoryUse::DeviceLocal, "viewer map (unused)");
+  map_ = noMap_->handle();
   cache_ = cache;
   encodeSrgb_ = encodeSrgb;
   allowDirect_ = allowDirect && context.storageWriteWithoutFormatEnabled();
@@ -62,6 +68,9 @@ void Presenter::buildPipelines(std::uint32_t groupX) {
   vulkan::Specialization spec;
   spec.set(gpu::kResolveSpecEncodeSrgb, encodeSrgb_);
   spec.set(gpu::kResolveSpecGroupX, groupX);
+  spec.set(gpu::kResolveSpecDisplay, displayMode_);
+  spec.set(gpu::kResolveSpecMapLow, mapLow_);
+  spec.set(gpu::kResolveSpecMapHigh, mapHigh_);
   const vk::raii::PipelineCache* cache = cache_ ? &cache_->cache() : nullptr;
   pipeline_.reset();
   directPipeline_.reset();
@@ -86,9 +95,10 @@ void Presenter::attach(const Swapchain& swapchain, vk::ImageView overlayLayer) {
   const auto& device = context_.device();
   vulkan::vulkanStep("creating the viewer's direct resolve sets", [&] {
     const auto n = static_cast<std::uint32_t>(swapchain.imageCount());
-    std::array<vk::DescriptorPoolSize, 3> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, n),
+    std::array<vk::DescriptorPoolSize, 4> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, n),
                                                 vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, n),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, n)};
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, n),
+                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, n)};
     directPool_ = vk::raii::DescriptorPool(
         device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, n, sizes));
     std::vector<vk::DescriptorSetLayout> layouts(n, *setLayout_);
@@ -103,7 +113,7 @@ void Presenter::attach(const Swapchain& swapchain, vk::ImageView overlayLayer) {
       device.updateDescriptorSets(writes, {});
     }
   });
-  if (sumsView_) writeSums();
+  writeSums();
 }
 
 void Presenter::detach() {
@@ -113,13 +123,27 @@ void Presenter::detach() {
 
 void Presenter::writeSums() {
   std::vector<vk::WriteDescriptorSet> writes;
-  writes.emplace_back(*set_, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr, nullptr,
-                      &sumsView_);
-  for (const auto& set : directSets_) {
-    writes.emplace_back(*set, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr, nullptr,
-                        &sumsView_);
+  vk::DescriptorBufferInfo map(map_, 0, VK_WHOLE_SIZE);
+  std::vector<vk::DescriptorSet> sets{*set_};
+  for (const auto& set : directSets_) sets.push_back(*set);
+  for (vk::DescriptorSet set : sets) {
+    if (sumsView_) {
+      writes.emplace_back(set, gpu::kResolveBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer, nullptr,
+                          nullptr, &sumsView_);
+    }
+    writes.emplace_back(set, gpu::kResolveBindingMap, 0, 1, vk::DescriptorType::eStorageBuffer, nullptr, &map);
   }
   context_.device().updateDescriptorSets(writes, {});
+}
+
+void Presenter::setDisplay(std::uint32_t display, vk::Buffer map, float mapLow, float mapHigh) {
+  const bool rebuild = display != displayMode_ || mapLow != mapLow_ || mapHigh != mapHigh_;
+  displayMode_ = display;
+  mapLow_ = mapLow;
+  mapHigh_ = mapHigh;
+  map_ = map ? map : noMap_->handle();
+  writeSums();
+  if (rebuild && groupX_ != 0) buildPipelines(groupX_);
 }
 
 void Presenter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent2D size) {

@@ -14,6 +14,7 @@
 #include <vulkan/vulkan_raii.hpp>
 
 #include "viewer/device_image.h"
+#include "vk/buffer.h"
 #include "vk/compute_pipeline.h"
 #include "vk/context.h"
 
@@ -37,6 +38,9 @@ public:
   // SHADER_READ_ONLY_OPTIMAL when read), and drops them before the swapchain is re-created. Only
   // while no frame is pending.
   void attach(const Swapchain& swapchain, vk::ImageView overlayLayer);
+  // What the pass shows (kDisplay* in resolve_types.h) and, for a map, its values (a uint per
+  // pixel, row-major as the sums) and its log scale's ends. Only while no frame is pending.
+  void setDisplay(std::uint32_t display, vk::Buffer map = {}, float mapLow = 0.001f, float mapHigh = 0.1f);
   void detach();
 
   // The swapchain image a frame is shown on: its index, handle and size.
@@ -81,7 +85,11 @@ private:
   vulkan::PipelineCache* cache_ = nullptr;
   bool encodeSrgb_ = true;
   bool allowDirect_ = false;
-  std::uint32_t groupX_ = 0; // the pipelines' workgroup width (0: none built yet)
+  std::uint32_t groupX_ = 0;      // the pipelines' workgroup width (0: none built yet)
+  std::uint32_t displayMode_ = 0; // kDisplay*
+  float mapLow_ = 0.001f, mapHigh_ = 0.1f;
+  std::unique_ptr<vulkan::Buffer> noMap_; // bound while the image is shown (every binding must be valid)
+  vk::Buffer map_;
 
   vk::raii::Sampler layerSampler_{nullptr}; // nearest: the layer is read texel for texel
   DeviceImage display_;                     // resolved colour, the blit's source (blit path)

@@ -25,6 +25,17 @@ bool sameKnobs(const RenderSettings& a, const RenderSettings& b) {
          a.textureFilter == b.textureFilter;
 }
 
+DisplayMode nextDisplayMode(DisplayMode mode) {
+  switch (mode) {
+  case DisplayMode::Image:
+    return DisplayMode::Error;
+  case DisplayMode::Error:
+    return DisplayMode::Cost;
+  default:
+    return DisplayMode::Image;
+  }
+}
+
 Accumulation::Step Accumulation::next(std::uint32_t samplesPerFrame, std::uint32_t maxSamples) {
   Step step;
   if (samples_ >= maxSamples) return step;

@@ -26,6 +26,24 @@ struct EffectToggles {
 // of one frame in 8.
 constexpr std::uint32_t kRayCountEvery = 16;
 
+// What the window shows (M cycles, --display): the image, or a map of a per-pixel quantity as a heat
+// colour on a log scale: the estimated standard error of the pixel's mean (the split-half estimate of
+// render --noise-threshold, host/viewer/convergence.h), or the rays traced per sample (cost).
+enum class DisplayMode { Image, Error, Cost };
+template <> struct EnumNames<DisplayMode> {
+  static constexpr std::array<EnumName<DisplayMode>, 3> values{
+      {{DisplayMode::Image, "image"}, {DisplayMode::Error, "error"}, {DisplayMode::Cost, "cost"}}};
+};
+DisplayMode nextDisplayMode(DisplayMode mode); // image -> error -> cost -> image
+
+// The noise threshold the viewer judges convergence by when neither the scene nor the command line
+// sets one (render.noise_threshold, --noise-threshold).
+constexpr double kDefaultViewThreshold = 0.01;
+// The scales of the maps: the error map spans threshold / 10 .. threshold * 10, the cost map
+// kCostMapLow .. kCostMapHigh rays per sample (both logarithmic).
+constexpr double kCostMapLow = 1.0;
+constexpr double kCostMapHigh = 64.0;
+
 struct ViewSettings {
   RenderSettings render;           // accuracy knobs; width and height follow the window
   EffectToggles effects;           //
@@ -34,6 +52,7 @@ struct ViewSettings {
   bool countStats = true;          // ray counters on, in 1 frame of kRayCountEvery (viewer.cpp)
   double renderScale = 1.0;        // render resolution relative to the window (blit scales up)
   double motionScale = 1.0;        // further scale while the camera moves (interactive frame rates)
+  DisplayMode display = DisplayMode::Image;
 };
 
 // The scene with the switched-off effects taken out of its description.

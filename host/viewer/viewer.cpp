@@ -8,10 +8,12 @@
 #include <cstdio>
 #include <memory>
 
+#include "../../shaders/shared/resolve_types.h"
 #include "image/image_io.h"
 #include "scene/features.h"
 #include "util/error.h"
 #include "viewer/camera_controller.h"
+#include "viewer/convergence.h"
 #include "viewer/frames.h"
 #include "viewer/overlay.h"
 #include "viewer/presenter.h"
@@ -88,13 +90,14 @@ public:
             SceneWatcher& watcher, Scene scene)
       : o_(options), window_(window), context_(context), watcher_(watcher), scene_(std::move(scene)),
         swapchain_(context, window.createSurface(context.instance()), options.vsync), renderer_(context, cache),
-        presenter_(context, cache, swapchain_.encodeInShader(), options.directResolve), frames_(context),
-        camera_(scene_.camera) {
+        presenter_(context, cache, swapchain_.encodeInShader(), options.directResolve), convergence_(context, cache),
+        frames_(context), camera_(scene_.camera) {
     settings_.render = scene_.render;
     settings_.samplesPerFrame = options.samplesPerFrame.value_or(1);
     settings_.maxSamples = options.maxSamples;
     settings_.countStats = options.countStats;
     settings_.renderScale = options.renderScale;
+    settings_.display = options.display;
     // A CPU device cannot trace full frames at interactive rates: while the camera moves, fewer pixels.
     settings_.motionScale = options.motionScale.value_or(context.info().type == "CPU" ? 0.5 : 1.0);
     if (scripted()) {
@@ -125,7 +128,13 @@ private:
   // Scripted runs: counts the frame, resizes halfway when asked, and says whether the script is done.
   bool scriptFinished(const Accumulation::Step& step);
   void recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex, bool captureWindow,
-                   bool countRays);
+                   bool countRays, bool measure);
+  // The noise threshold convergence is judged by: the scene's or --noise-threshold, else the default.
+  double threshold() const {
+    return settings_.render.noiseThreshold > 0.0 ? settings_.render.noiseThreshold : kDefaultViewThreshold;
+  }
+  // Points the resolve pass at what the display mode shows.
+  void applyDisplay();
   bool takeCountTurn(const Accumulation::Step& step);
   bool finishesScript(const Accumulation::Step& step) const;
   void prepareWindowCapture();
@@ -146,6 +155,7 @@ private:
   Swapchain swapchain_;
   Renderer renderer_;
   Presenter presenter_;
+  ConvergenceMeter convergence_;
   FrameRing frames_;
   std::unique_ptr<Overlay> overlay_;
   std::unique_ptr<vulkan::Buffer> windowPixels_; // --screenshot-window: the last frame as shown
@@ -167,6 +177,13 @@ private:
   Clock::time_point resizeRequestedAt_{};
   vk::Extent2D windowPixelsExtent_{0, 0};
   bool windowCaptured_ = false;
+  bool pixelRays_ = false;                        // the Renderer counts rays per pixel (the cost map)
+  DisplayMode shownDisplay_ = DisplayMode::Image; // what the resolve pass is built to show
+  // The convergence figures: measured in one frame per statistics interval (and a script's last),
+  // read once that frame has completed.
+  bool measureDue_ = true;
+  bool measurePending_ = false;
+  ConvergenceFigures figures_;
 
   // Statistics for the overlay: averages over the last interval, and totals for --stats.
   FrameTimes interval_;
@@ -260,6 +277,9 @@ void FrameLoop::handleAction(ViewerAction action) {
   case ViewerAction::ToggleOverlay:
     overlay_->visible = !overlay_->visible;
     break;
+  case ViewerAction::CycleDisplay:
+    settings_.display = nextDisplayMode(settings_.display);
+    break;
   case ViewerAction::Quit:
     window_.requestClose();
     break;
@@ -278,10 +298,21 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   moving_ = lastCameraChange_ && msBetween(*lastCameraChange_, now) < kMotionHoldMs;
   const vk::Extent2D size = renderSize();
   const bool sizeChanged = size != presenter_.size();
-  if (!(sceneReloaded || effectsChanged || knobsChanged || cameraChanged || sizeChanged || !prepared_)) return;
+  // The cost map needs every sample's rays counted: entering it restarts the image, leaving it
+  // only changes the pipelines (the samples are the same either way).
+  const bool pixelRays = settings_.display == DisplayMode::Cost;
+  const bool pixelRaysChanged = pixelRays != pixelRays_;
+  const bool restart = sceneReloaded || effectsChanged || knobsChanged || cameraChanged || sizeChanged || !prepared_ ||
+                       (pixelRaysChanged && pixelRays);
+  const bool displayChanged = settings_.display != shownDisplay_ || threshold() != convergence_.threshold();
+  if (!restart && !pixelRaysChanged && !displayChanged) return;
 
   // The Renderer's parameters, image and counters are shared by every frame: nothing may be in flight.
   quiesce();
+  if (!restart && !pixelRaysChanged) {
+    applyDisplay();
+    return;
+  }
   if (sceneReloaded || effectsChanged || !prepared_) renderer_.setScene(withEffects(scene_, settings_.effects));
   RenderSettings r = settings_.render;
   r.width = size.width;
@@ -289,15 +320,47 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   r.spp = settings_.samplesPerFrame;
   // Progressive sampling already antialiases every pixel; adaptive refinement is a headless pass.
   r.antialiasing = Antialiasing::Stratified;
+  // Frames sample every pixel alike; the noise threshold only judges convergence (ConvergenceMeter),
+  // and the time limit is a headless one.
+  r.noiseThreshold = 0.0;
+  r.timeLimit = 0.0;
   RenderOptions options = o_.render;
   options.progressive = true;
   options.countStats = settings_.countStats;
+  options.pixelRays = pixelRays;
   renderer_.prepare(camera_.camera(), r, options);
+  pixelRays_ = pixelRays;
   presenter_.bind(renderer_.imageBuffer(), renderer_.imageTexelView(), size);
+  applyDisplay();
+  if (!restart) return;
   accumulation_.restart();
+  convergence_.restart();
+  // A measurement of the image before the restart is of no use any more.
+  figures_ = ConvergenceFigures();
+  measurePending_ = false;
+  measureDue_ = true;
   // A scripted run's frames all belong to the final image: a new size or scene starts the count again.
   if (sizeChanged || sceneReloaded) tracedFrames_ = 0;
   prepared_ = true;
+}
+
+void FrameLoop::applyDisplay() {
+  convergence_.bind(renderer_.imageBuffer(), renderer_.imageTexelView(), presenter_.size(), threshold());
+  const double t = threshold();
+  switch (settings_.display) {
+  case DisplayMode::Image:
+    presenter_.setDisplay(gpu::kDisplayImage);
+    break;
+  case DisplayMode::Error:
+    presenter_.setDisplay(gpu::kDisplayError, convergence_.errors(), static_cast<float>(t / 10.0),
+                          static_cast<float>(t * 10.0));
+    break;
+  case DisplayMode::Cost:
+    presenter_.setDisplay(gpu::kDisplayCost, renderer_.pixelRaysBuffer(), static_cast<float>(kCostMapLow),
+                          static_cast<float>(kCostMapHigh));
+    break;
+  }
+  shownDisplay_ = settings_.display;
 }
 
 void FrameLoop::collectStats() {
@@ -311,6 +374,11 @@ void FrameLoop::publishStats(bool force) {
   if (!force && msBetween(statsTaken_, now) < 500.0) return;
   quiesce();
   collectStats();
+  if (measurePending_) {
+    figures_ = convergence_.read();
+    measurePending_ = false;
+    measureDue_ = true;
+  }
   const std::uint32_t n = countedInInterval_;
   if (n > 0) {
     const RayStats& s = intervalRays_;
@@ -341,7 +409,7 @@ void FrameLoop::publishStats(bool force) {
 }
 
 void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& step, std::uint32_t imageIndex,
-                            bool captureWindow, bool countRays) {
+                            bool captureWindow, bool countRays, bool measure) {
   const vk::raii::CommandBuffer& cmd = slot.cmd;
   vulkan::vulkanStep("recording a frame", [&] {
     cmd.begin(vk::CommandBufferBeginInfo(vk::CommandBufferUsageFlagBits::eOneTimeSubmit));
@@ -360,6 +428,9 @@ void FrameLoop::recordFrame(FrameRing::Slot& slot, const Accumulation::Step& ste
     // Direct path: the panel goes on its layer (when it changed) and the resolve composites it.
     if (lastResolveDirect_) overlay_->recordLayer(cmd);
     frames_.stamp(cmd, FrameRing::kLayered, vk::PipelineStageFlagBits::eColorAttachmentOutput);
+    // The error estimates (for the error map, or a measurement) and the sums' copy when the count
+    // doubled; timed with the resolve pass.
+    convergence_.record(cmd, accumulation_.samples(), settings_.display == DisplayMode::Error, measure);
     presenter_.recordResolve(cmd, target);
     frames_.stamp(cmd, FrameRing::kResolved, vk::PipelineStageFlagBits::eComputeShader);
     presenter_.recordBlit(cmd, target);
@@ -442,8 +513,17 @@ void FrameLoop::saveWindowScreenshot(const std::filesystem::path& path) {
 
 void FrameLoop::saveScreenshot(const std::filesystem::path& path) {
   quiesce();
-  // The Renderer's image, not the swapchain's: no overlay, full float precision until encoding.
+  // The Renderer's image, not the swapchain's: no overlay, full float precision until encoding. A
+  // map's screenshot holds its values (the error, or rays per sample) in every channel.
   Image image = renderer_.readImage();
+  if (settings_.display == DisplayMode::Error) {
+    const std::vector<float> errors = convergence_.readErrors();
+    for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = glm::vec3(errors[i]);
+  } else if (settings_.display == DisplayMode::Cost) {
+    const std::vector<std::uint32_t> rays = renderer_.readPixelRays();
+    const float samples = static_cast<float>(std::max(1u, accumulation_.samples()));
+    for (std::size_t i = 0; i < image.pixels.size(); ++i) image.pixels[i] = glm::vec3(float(rays[i]) / samples);
+  }
   writeImage(path, image);
   status_ = "saved " + path.string() + " (" + std::to_string(accumulation_.samples()) + " samples/pixel)";
   std::printf("vkray: %s\n", status_.c_str());
@@ -491,6 +571,10 @@ OverlayModel FrameLoop::overlayModel() const {
   m.cameraMode = camera_.mode();
   m.reloadError = watcher_.error();
   m.status = status_;
+  m.display = settings_.display;
+  m.noiseThreshold = threshold();
+  m.defaultThreshold = !(settings_.render.noiseThreshold > 0.0);
+  m.convergence = figures_;
   return m;
 }
 
@@ -522,6 +606,10 @@ ViewerSummary FrameLoop::summarize() const {
     v.mraysPerSecond = traceMs > 0 ? v.raysPerFrame / (traceMs * 1e3) : 0.0;
   }
   v.samples = accumulation_.samples();
+  v.display = settings_.display;
+  v.noiseThreshold = threshold();
+  v.defaultThreshold = !(settings_.render.noiseThreshold > 0.0);
+  v.convergence = figures_;
   return v;
 }
 
@@ -615,7 +703,13 @@ int FrameLoop::run() {
     Accumulation::Step step = accumulation_.next(settings_.samplesPerFrame, settings_.maxSamples);
     const bool captureWindow = !o_.windowScreenshot.empty() && finishesScript(step);
     if (captureWindow) prepareWindowCapture();
-    recordFrame(slot, step, *image, captureWindow, takeCountTurn(step));
+    // A script's last frame is measured, so that its figures are those of the final image.
+    const bool measure = measureDue_ || finishesScript(step);
+    recordFrame(slot, step, *image, captureWindow, takeCountTurn(step), measure);
+    if (measure) {
+      measureDue_ = false;
+      measurePending_ = true;
+    }
     windowCaptured_ = windowCaptured_ || captureWindow;
     frames_.submit(swapchain_.renderFinished(*image));
     auto presentStart = Clock::now();
@@ -685,6 +779,16 @@ void printViewerSummary(const ViewerSummary& v) {
   }
   std::printf("samples: %u\n", v.samples);
   std::printf("minimized: %.0f ms\n", v.minimizedMs);
+  std::printf("display: %s\n", std::string(enumName(v.display)).c_str());
+  std::printf("noise threshold: %g%s\n", v.noiseThreshold, v.defaultThreshold ? " (default)" : "");
+  const ConvergenceFigures& c = v.convergence;
+  if (c.measured) {
+    // The last frame's estimate (convergence.h); none while no pixel has two samples.
+    std::printf("error samples: %u\n", c.samples);
+    std::printf("error mean: %.6g\n", c.errorMean);
+    std::printf("error p95: %.6g\n", c.errorP95);
+    std::printf("converged: %.2f %%\n", 100.0 * c.converged);
+  }
 }
 
 int runViewer(const ViewerOptions& o) {

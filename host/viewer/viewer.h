@@ -12,6 +12,8 @@
 #include "render/renderer.h"
 #include "scene/model_scene.h"
 #include "scene/scene.h"
+#include "viewer/convergence.h"
+#include "viewer/view_settings.h"
 #include "vk/device_flags.h"
 
 namespace vkray {
@@ -35,9 +37,13 @@ struct ViewerSummary {
   bool rayCounts = false;
   std::uint64_t countedFrames = 0; // frames traced with the ray counters (a sample of them, viewer.cpp)
   double raysPerFrame = 0.0;
-  double mraysPerSecond = 0.0; // rays / trace time
-  std::uint32_t samples = 0;   // samples per pixel at the end
-  double minimizedMs = 0.0;    // time the window spent minimized (nothing traced)
+  double mraysPerSecond = 0.0;              // rays / trace time
+  std::uint32_t samples = 0;                // samples per pixel at the end
+  double minimizedMs = 0.0;                 // time the window spent minimized (nothing traced)
+  DisplayMode display = DisplayMode::Image; // what the window showed at the end
+  double noiseThreshold = 0.0;              // convergence judged at this threshold
+  bool defaultThreshold = false;            // kDefaultViewThreshold: neither scene nor flag set one
+  ConvergenceFigures convergence;           // of the last frame
   double fps() const { return frameMs > 0 ? 1000.0 / frameMs : 0.0; }
   double gpuMs() const { return traceMs + resolveMs + blitMs + overlayMs; }
 };
@@ -56,11 +62,13 @@ struct ViewerOptions {
   bool directResolve = true;                // the resolve pass writes the swapchain image where it can (presenter.h)
   std::optional<std::uint32_t> windowWidth; // default: the scene's image size
   std::optional<std::uint32_t> windowHeight;
-  double renderScale = 1.0;          // render resolution relative to the window
-  std::optional<double> motionScale; // while the camera moves; default 0.5 on CPU devices, else 1
-  std::uint32_t maxSamples = 4096;   // accumulation stops here
-  bool overlay = true;               // shown at start (H toggles)
-  bool countStats = true;            // ray counters at start
+  double renderScale = 1.0;                 // render resolution relative to the window
+  std::optional<double> motionScale;        // while the camera moves; default 0.5 on CPU devices, else 1
+  std::uint32_t maxSamples = 4096;          // accumulation stops here
+  bool overlay = true;                      // shown at start (H toggles)
+  bool countStats = true;                   // ray counters at start
+  DisplayMode display = DisplayMode::Image; // at start (M cycles); a scripted run's screenshot holds
+                                            // a map's values (error, or rays per sample) in each channel
 
   std::uint32_t frames = 0;                   // scripted: trace this many frames, then exit
   std::filesystem::path screenshot;           // scripted: written at exit; interactive: where P saves

@@ -164,6 +164,9 @@ void Window::onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int /*m
   case GLFW_KEY_F1:
     actions.push_back(ViewerAction::ToggleOverlay);
     break;
+  case GLFW_KEY_M: // E moves the camera in fly mode
+    actions.push_back(ViewerAction::CycleDisplay);
+    break;
   case GLFW_KEY_ESCAPE:
     actions.push_back(ViewerAction::Quit);
     break;

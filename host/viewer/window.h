@@ -26,7 +26,7 @@ public:
 };
 
 // Keys that do something once per press.
-enum class ViewerAction { ToggleFly, ResetCamera, SaveCamera, Screenshot, ToggleOverlay, Quit };
+enum class ViewerAction { ToggleFly, ResetCamera, SaveCamera, Screenshot, ToggleOverlay, CycleDisplay, Quit };
 
 struct InputFrame {
   glm::dvec2 cursorDelta{0.0}; // pixels since the last frame, y down

@@ -120,6 +120,7 @@ std::uint32_t texelBytes(vk::Format format) {
   case vk::Format::eR32G32B32A32Uint:
     return 16;
   case vk::Format::eR32Uint:
+  case vk::Format::eR32Sfloat: // the viewer's error estimates
     return 4;
   default:
     throw DeviceError("texel buffer format " + vk::to_string(format) + " is not one vkray uses");

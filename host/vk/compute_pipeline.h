@@ -2,6 +2,7 @@
 // pipeline cache that lets a second run skip the driver's compile.
 #pragma once
 
+#include <bit>
 #include <cstdint>
 #include <filesystem>
 #include <map>
@@ -14,12 +15,13 @@ namespace vkray::vulkan {
 
 class Context;
 
-// Specialization constants by id; every value is 32 bits (VkBool32, int or uint).
+// Specialization constants by id; every value is 32 bits (VkBool32, int, uint or float).
 class Specialization {
 public:
   void set(std::uint32_t id, std::uint32_t value) { values_[id] = value; }
   void set(std::uint32_t id, bool value) { values_[id] = value ? 1u : 0u; }
   void set(std::uint32_t id, int value) { values_[id] = static_cast<std::uint32_t>(value); }
+  void set(std::uint32_t id, float value) { values_[id] = std::bit_cast<std::uint32_t>(value); }
   const std::map<std::uint32_t, std::uint32_t>& values() const { return values_; }
   bool operator<(const Specialization& o) const { return values_ < o.values_; }
   bool operator==(const Specialization& o) const { return values_ == o.values_; }

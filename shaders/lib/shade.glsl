@@ -113,7 +113,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   if (SHADOW_MODE == kShadowsOpaque) {
     // An origin at the light (dist 0) is lit; its NaN direction meets nothing. Selects, not an
     // early return: on CPU drivers a return masks all the code after it.
-    if (COUNT_STATS) gCount.shadowRays += uint(dist > 0.0);
+    if (COUNT_RAYS) gCount.shadowRays += uint(dist > 0.0);
     Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true, false);
     return (dist <= 0.0 || h.kind == kNoHit) ? vec3(1.0) : vec3(0.0);
   }
@@ -124,7 +124,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   float enteredAt = 0.0;
   int crossing = 0;
   while (true) { // tested at the bottom (see traverseBvh in bvh.glsl)
-    if (COUNT_STATS) gCount.shadowRays++;
+    if (COUNT_RAYS) gCount.shadowRays++;
     TraceRay r = makeTraceRay(o, dir);
     float remaining = length(lightPos - o);
     Hit h = traceScene(r, remaining, false, true, false);

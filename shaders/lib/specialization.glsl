@@ -35,7 +35,10 @@ layout(constant_id = kSpecTextures) const bool TEXTURES = false;
 layout(constant_id = kSpecTextureFilter) const uint TEXTURE_FILTER = kTextureCone;
 layout(constant_id = kSpecAlphaMask) const bool ALPHA_MASK = false;
 layout(constant_id = kSpecVertexColors) const bool VERTEX_COLORS = false;
+layout(constant_id = kSpecPixelRays) const bool PIXEL_RAYS = false;
 
 const bool ROBUST = NUMERICS == kNumericsRobust;
+// The invocation counts its rays (gCount) for the statistics buffer, or for its pixel's cost alone.
+const bool COUNT_RAYS = COUNT_STATS || PIXEL_RAYS;
 
 #endif

@@ -52,7 +52,10 @@ VKRAY_CONST(uint, kBindingEntryTexels, 16u);
 VKRAY_CONST(uint, kBindingTexCoords, 17u);   // texels (RGBA32F): 4 per textured triangle (below)
 VKRAY_CONST(uint, kBindingTextureInfo, 18u); // texels (RGBA32UI): texture references, then levels
 VKRAY_CONST(uint, kBindingTexels, 19u);      // texels (RGBA32F): every level of every texture, linear RGBA
-VKRAY_CONST(uint, kBindingCount, 20u);
+// uint[]: rays traced per pixel (eye, shadow, reflection, refraction), summed over its samples like
+// Image[]: written by the sample pass only where kSpecPixelRays is on (the viewer's cost map).
+VKRAY_CONST(uint, kBindingPixelRays, 20u);
+VKRAY_CONST(uint, kBindingCount, 21u);
 
 // Capacities of the uniform copy, 64 KiB in all (the smallest maxUniformBufferRange of the devices
 // vkray targets). On CPU drivers a UBO read is one vector gather, an SSBO read a per-lane scalar
@@ -113,7 +116,10 @@ VKRAY_CONST(uint, kSpecVertexColors, 30u);
 // The progressive renderer's pass (kPassList, host/render/adaptive.h): each invocation traces the
 // pixel of one entry of a list of open pixels and writes its sums and sums of squares.
 VKRAY_CONST(uint, kSpecListPass, 31u);
-VKRAY_CONST(uint, kSpecCount, 32u);
+// The sample pass adds each pixel's rays to PixelRays[] (kBindingPixelRays): the viewer's cost map.
+// Off in every headless pipeline, where the count and its store compile out.
+VKRAY_CONST(uint, kSpecPixelRays, 32u);
+VKRAY_CONST(uint, kSpecCount, 33u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 

@@ -19,6 +19,44 @@ VKRAY_CONST(uint, kResolveSpecEncodeSrgb, 0u); // 1: write sRGB-encoded values (
 VKRAY_CONST(uint, kResolveSpecGroupX, 1u); // the workgroup's width (local_size_x_id)
 VKRAY_CONST(uint, kResolveGroupX, 64u);    // its default (the shader's declared size)
 
+// What the resolve pass shows (host/viewer/view_settings.h, DisplayMode): the image, or a map of a
+// per-pixel quantity (kResolveBindingMap) as a heat colour on a log scale from MAP_LOW to MAP_HIGH.
+VKRAY_CONST(uint, kResolveBindingMap, 3u);  // uint[]: the error estimates (float bits) or rays per pixel
+VKRAY_CONST(uint, kResolveSpecDisplay, 2u); // kDisplay*
+VKRAY_CONST(uint, kResolveSpecMapLow, 3u);  // float: the value shown at the scale's bottom (blue)
+VKRAY_CONST(uint, kResolveSpecMapHigh, 4u); // float: the value shown at its top (red)
+VKRAY_CONST(uint, kDisplayImage, 0u);
+VKRAY_CONST(uint, kDisplayError, 1u); // the split-half standard error (shaders/convergence.comp)
+VKRAY_CONST(uint, kDisplayCost, 2u);  // rays traced per sample (Renderer's rays per pixel / samples)
+
+// ---- The convergence pass (shaders/convergence.comp, host/viewer/convergence.h) -----------------
+// Step 0 estimates each pixel's standard error from the sums and their copy taken when the sample
+// count last doubled; step 1 bins the estimates and counts the pixels whose 3 x 3 neighbourhood's
+// mean estimate is at most the threshold. Workgroups are image rows, as the resolve pass's.
+VKRAY_CONST(uint, kConvergenceBindingSums, 0u);      // storage texel buffer (RGBA32F): the sums now
+VKRAY_CONST(uint, kConvergenceBindingHalf, 1u);      // storage texel buffer (RGBA32F): their earlier copy
+VKRAY_CONST(uint, kConvergenceBindingErrors, 2u);    // storage texel buffer (R32F): the estimates
+VKRAY_CONST(uint, kConvergenceBindingHistogram, 3u); // uint[kHistogramWords]: the reduction (below)
+VKRAY_CONST(uint, kConvergenceSpecStep, 0u);         // 0: estimate; 1: reduce
+VKRAY_CONST(uint, kConvergenceSpecGroupX, 1u);       // the workgroup's width
+VKRAY_CONST(uint, kConvergenceSpecThreshold, 2u);    // float: the noise threshold
+// The histogram buffer's words: a zero the shader reads at run time (its push constant made opaque
+// to lavapipe's uniform inlining, docs/performance.md), the pixels counted, those converged, those
+// without an estimate yet (fewer than 2 samples, or none since the copy), then kHistogramBins bins
+// of log2(error), kHistogramBinsPerOctave to an octave from 2^kHistogramLowLog2 up (the first bin
+// also holds everything below, exact zeros included; the last everything above).
+VKRAY_CONST(uint, kHistogramZero, 0u);
+VKRAY_CONST(uint, kHistogramPixels, 1u);
+VKRAY_CONST(uint, kHistogramConverged, 2u);
+VKRAY_CONST(uint, kHistogramUnestimated, 3u);
+VKRAY_CONST(uint, kHistogramFirstBin, 4u);
+VKRAY_CONST(uint, kHistogramBins, 128u);
+VKRAY_CONST(uint, kHistogramBinsPerOctave, 4u);
+VKRAY_CONST(int, kHistogramLowLog2, -24);
+VKRAY_CONST(uint, kHistogramWords, 132u); // kHistogramFirstBin + kHistogramBins
+
+// Push constants: uvec2(width, height) of the image.
+
 #ifdef __cplusplus
 } // namespace vkray::gpu
 #endif

@@ -1,0 +1,83 @@
+// The viewer's convergence pass (host/viewer/convergence.h): each pixel's estimated standard error
+// while samples accumulate, and its reduction to the figures the overlay shows. The estimate is
+// render --noise-threshold's (host/render/adaptive.cpp, standardError): the mean A of the pixel's
+// n1 earlier samples (the sums' copy taken when the count last doubled) against the mean B of the
+// n2 since; with independent halves var(mean) = (A - B)^2 n1 n2 / n^2, the largest of R, G and B.
+#version 450
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_arithmetic : require
+#extension GL_KHR_shader_subgroup_basic : require
+
+#include "shared/resolve_types.h"
+
+layout(local_size_x = kResolveGroupX, local_size_x_id = kConvergenceSpecGroupX, local_size_y = 1,
+       local_size_z = 1) in;
+
+layout(constant_id = kConvergenceSpecStep) const uint STEP = 0u;
+layout(constant_id = kConvergenceSpecThreshold) const float THRESHOLD = 0.01;
+
+// Texel buffers: one 16-byte load per lane on lavapipe, where a storage buffer's vec4 is a loop.
+layout(binding = kConvergenceBindingSums, rgba32f) uniform readonly restrict imageBuffer sums;
+layout(binding = kConvergenceBindingHalf, rgba32f) uniform readonly restrict imageBuffer earlier;
+layout(binding = kConvergenceBindingErrors, r32f) uniform restrict imageBuffer errors;
+layout(std430, binding = kConvergenceBindingHistogram) restrict buffer Histogram { uint words[]; };
+layout(push_constant) uniform Push { uvec2 size; } pc;
+
+// No estimate: the largest float rather than +inf, which fast-math compilers may assume away. The
+// host reads it as +inf (ConvergenceMeter::readErrors).
+const float kNoEstimate = 3.402823466e+38;
+
+float estimate(int i) {
+  vec4 s = imageLoad(sums, i);
+  vec4 h = imageLoad(earlier, i);
+  float n = s.w, n1 = h.w, n2 = s.w - h.w;
+  // No copy yet, or no sample since it (or a copy from before a restart): no estimate.
+  if (!(n1 > 0.0 && n2 > 0.0)) return kNoEstimate;
+  vec3 d = abs(h.rgb / n1 - (s.rgb - h.rgb) / n2);
+  return max(d.r, max(d.g, d.b)) * sqrt(n1 * n2) / n;
+}
+
+void main() {
+  // The size through a zero read at run time: lavapipe's dispatch-time inlining of push constants
+  // that decide a branch crashes on Mesa 22.3 (docs/performance.md).
+  uvec2 size = pc.size + uvec2(words[kHistogramZero]);
+  ivec2 pixel = ivec2(gl_GlobalInvocationID.xy);
+  bool inside = all(lessThan(uvec2(pixel), size));
+  int i = pixel.y * int(size.x) + pixel.x;
+  if (STEP == 0u) {
+    if (inside) imageStore(errors, i, vec4(estimate(i)));
+    return;
+  }
+  // Step 1: the pixel's bin, and whether its neighbourhood has converged (as adaptive.cpp's
+  // neighbourhoodError: the mean over the 3 x 3 pixels inside the image; one without an estimate never has).
+  bool converged = false;
+  bool unestimated = false;
+  if (inside) {
+    float e = imageLoad(errors, i).r;
+    unestimated = e >= kNoEstimate;
+    float sum = 0.0;
+    float count = 0.0;
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        ivec2 q = pixel + ivec2(dx, dy);
+        bool within = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(size)));
+        ivec2 c = clamp(q, ivec2(0), ivec2(size) - 1);
+        sum += within ? imageLoad(errors, c.y * int(size.x) + c.x).r : 0.0;
+        count += within ? 1.0 : 0.0;
+      }
+    }
+    converged = sum / count <= THRESHOLD;
+    if (!unestimated) {
+      float bin = (log2(max(e, 1e-30)) - float(kHistogramLowLog2)) * float(kHistogramBinsPerOctave);
+      uint b = uint(clamp(bin, 0.0, float(kHistogramBins - 1u)));
+      atomicAdd(words[kHistogramFirstBin + b], 1u);
+    }
+  }
+  // One atomic per subgroup for the counts (each atomic is a loop over the lanes on CPU drivers).
+  uvec3 counts = subgroupAdd(uvec3(inside ? 1u : 0u, converged ? 1u : 0u, unestimated ? 1u : 0u));
+  if (subgroupElect()) {
+    atomicAdd(words[kHistogramPixels], counts.x);
+    if (counts.y != 0u) atomicAdd(words[kHistogramConverged], counts.y);
+    if (counts.z != 0u) atomicAdd(words[kHistogramUnestimated], counts.z);
+  }
+}
