@@ -181,7 +181,7 @@ def table(rows, base):
         cells = f"| {r['knob']} | {r['value']} | {times} |"
         if counted:
             n, b = r["jit_instructions"], base["jit_instructions"]
-            cells += (f" {n / 1e6:.1f} | {n / b:.2f} |" if n is not None and b else " — | — |")
+            cells += (f" {n / 1e6:.3g} | {n / b:.2f} |" if n is not None and b else " — | — |")
         rmse = f"{r['rmse']:.5f}"
         if r["rmse_max"] > r["rmse_min"]:
             rmse += f" ({r['rmse_min']:.5f}–{r['rmse_max']:.5f})"
