@@ -8,6 +8,8 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 
@@ -358,6 +360,21 @@ namespace {
 
 // The accuracy harness end to end in quick mode: a CSV row per point with no NaN, then the plots and
 // the report from tools/plot_accuracy.py.
+// Splits one CSV line into fields (quoted fields may hold commas).
+std::vector<std::string> csvFields(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (char c : line) {
+    if (c == '"')
+      quoted = !quoted;
+    else if (c == ',' && !quoted)
+      fields.emplace_back();
+    else
+      fields.back() += c;
+  }
+  return fields;
+}
+
 TEST_F(Cli, AccuracyBenchQuickWritesACsvAndPlots) {
   fs::path out = dir_ / "acc";
   RunResult r = vkray("bench accuracy --quick --out '" + out.string() + "'");
@@ -365,28 +382,50 @@ TEST_F(Cli, AccuracyBenchQuickWritesACsvAndPlots) {
   std::istringstream csv(slurp(out / "accuracy.csv"));
   std::string header;
   std::getline(csv, header);
-  std::size_t columns = static_cast<std::size_t>(std::count(header.begin(), header.end(), ',')) + 1;
-  EXPECT_NE(header.find("trace_ms"), std::string::npos);
-  EXPECT_NE(header.find("rmse"), std::string::npos);
+  const std::vector<std::string> names = csvFields(header);
+  std::map<std::string, std::size_t> column;
+  for (std::size_t i = 0; i < names.size(); ++i) column[names[i]] = i;
+  for (const char* c : {"trace_ms", "trace_ms_min", "trace_ms_max", "runs", "rmse", "rmse_min", "rmse_max", "spp_mean",
+                        "noise_threshold", "time_limit"})
+    ASSERT_TRUE(column.count(c)) << c << " missing from " << header;
   int rows = 0;
   std::map<std::string, int> knobs;
   for (std::string line; std::getline(csv, line);) {
     ++rows;
-    // Quoted values hold no commas in quick mode; count fields outside quotes anyway.
-    std::size_t fields = 1;
-    bool quoted = false;
-    for (char c : line) {
-      if (c == '"')
-        quoted = !quoted;
-      else if (c == ',' && !quoted)
-        ++fields;
-    }
-    EXPECT_EQ(fields, columns) << line;
+    const std::vector<std::string> f = csvFields(line);
+    ASSERT_EQ(f.size(), names.size()) << line;
     EXPECT_EQ(line.find("nan"), std::string::npos) << line;
-    knobs[line.substr(line.find(',') + 1, line.find(',', line.find(',') + 1) - line.find(',') - 1)]++;
+    const std::string knob = f[column["knob"]];
+    knobs[knob]++;
+    auto num = [&](const char* c) { return std::stod(f[column[c]]); };
+    // The spread: min <= median <= max over the timed runs (quick mode times each point twice,
+    // interleaved; the reference is not timed again).
+    EXPECT_EQ(num("runs"), knob == "reference" ? 0 : 2) << line;
+    EXPECT_LE(num("trace_ms_min"), num("trace_ms")) << line;
+    EXPECT_LE(num("trace_ms"), num("trace_ms_max")) << line;
+    EXPECT_GT(num("trace_ms_min"), 0.0) << line;
+    EXPECT_LE(num("rmse_min"), num("rmse")) << line;
+    EXPECT_LE(num("rmse"), num("rmse_max")) << line;
+    if (knob == "noise_threshold") {
+      EXPECT_EQ(num("noise_threshold"), 0.02) << line;
+      EXPECT_GE(num("spp_mean"), 4.0) << line; // the points' min_spp and max_spp
+      EXPECT_LE(num("spp_mean"), 64.0) << line;
+    } else if (knob == "time_limit") {
+      EXPECT_EQ(num("time_limit"), 0.05) << line;
+      EXPECT_GE(num("spp_mean"), 1.0) << line;
+    } else {
+      EXPECT_EQ(num("noise_threshold"), 0.0) << line;
+      EXPECT_EQ(num("time_limit"), 0.0) << line;
+      EXPECT_EQ(num("spp_mean"), num("spp")) << line;
+      if (knob != "reference") {
+        EXPECT_EQ(num("rmse_min"), num("rmse_max")) << line; // deterministic images
+      }
+    }
   }
-  EXPECT_EQ(rows, 6); // reference + baseline + depth, bailout, spp, numerics
-  for (const char* k : {"reference", "baseline", "depth", "bailout", "spp", "numerics"}) EXPECT_EQ(knobs[k], 1) << k;
+  EXPECT_EQ(rows, 8); // reference + baseline + depth, bailout, spp, numerics, noise_threshold, time_limit
+  for (const char* k :
+       {"reference", "baseline", "depth", "bailout", "spp", "numerics", "noise_threshold", "time_limit"})
+    EXPECT_EQ(knobs[k], 1) << k;
 
   std::string cmd = std::string("/usr/bin/python3 '") + VKRAY_SOURCE_DIR + "/tools/plot_accuracy.py' '" + out.string() +
                     "' '" + (out / "report.md").string() + "' '" + (out / "img").string() + "' >/dev/null 2>&1";
@@ -395,6 +434,10 @@ TEST_F(Cli, AccuracyBenchQuickWritesACsvAndPlots) {
   EXPECT_TRUE(fs::exists(out / "img" / "accuracy-showcase.png"));
   std::string report = slurp(out / "report.md");
   EXPECT_NE(report.find("| numerics | naive |"), std::string::npos);
+  EXPECT_NE(report.find("| noise_threshold | 0.02 |"), std::string::npos);
+  EXPECT_NE(report.find("| time_limit | 0.05 |"), std::string::npos);
+  EXPECT_NE(report.find("min–max ms"), std::string::npos); // the spread beside each time
+  EXPECT_NE(report.find("Within noise"), std::string::npos);
   EXPECT_NE(report.find("Pareto front"), std::string::npos);
 }
 } // namespace

@@ -51,10 +51,14 @@ struct BenchAccuracyArgs {
   std::vector<std::filesystem::path> scenes; // default: showcase, glass, seed and two hard cases
   std::filesystem::path out = "accuracy";
   DeviceFlags device;
-  int runs = 5;
-  std::uint32_t height = 240;
+  int runs = 5;               // timed runs per point, interleaved
+  std::uint32_t height = 320; // the cheapest point takes ~15-20 ms on lavapipe (2 cores), the baselines 25+ ms
   int referenceSpp = 256;
   bool quick = false; // tiny images, few points: seconds (the test suite runs it)
+  // Run under callgrind (tools/accuracy-report --count-instructions): no timing, each point rendered
+  // once between client requests at countHeight, for its executed instructions.
+  bool countInstructions = false;
+  std::uint32_t countHeight = 48;
 };
 
 // Error against time for every accuracy knob (docs/accuracy.md).

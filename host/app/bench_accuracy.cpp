@@ -18,6 +18,19 @@
 #include "util/error.h"
 #include "vk/context.h"
 
+// Callgrind's client requests (they do nothing outside valgrind; Debian ships the header with
+// valgrind). Without it, --count-instructions is refused.
+#if __has_include(<valgrind/callgrind.h>)
+#include <valgrind/callgrind.h>
+#define VKRAY_HAVE_CALLGRIND 1
+#else
+#define VKRAY_HAVE_CALLGRIND 0
+#define CALLGRIND_START_INSTRUMENTATION
+#define CALLGRIND_STOP_INSTRUMENTATION
+#define CALLGRIND_ZERO_STATS
+#define CALLGRIND_DUMP_STATS_AT(label) (void)(label)
+#endif
+
 namespace vkray {
 
 namespace {
@@ -48,6 +61,16 @@ glm::vec3 heat(float e, float full) {
   return x < 0.5f ? glm::mix(cold, mid, x * 2.0f) : glm::mix(mid, hot, x * 2.0f - 1.0f);
 }
 
+// A progressive point: 4 to 64 samples per pixel, the range of the spp points, and well below the
+// reference's 256, whose first samples every point shares (a point near the reference's count
+// would look better than it is).
+void progressive(RenderSettings& s, double noiseThreshold, double timeLimit) {
+  s.noiseThreshold = noiseThreshold;
+  s.timeLimit = timeLimit;
+  s.minSpp = 4;
+  s.maxSpp = 64;
+}
+
 std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, bool float64) {
   std::vector<Point> p;
   auto add = [&](std::string knob, std::string value, std::function<void(RenderSettings&)> apply) {
@@ -64,6 +87,8 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
     add("bailout", "1/16", [](RenderSettings& s) { s.bailout = 1.0 / 16; });
     add("spp", "4", [](RenderSettings& s) { s.spp = 4; });
     addEnum("numerics", Numerics::Naive, &RenderSettings::numerics);
+    add("noise_threshold", "0.02", [](RenderSettings& s) { progressive(s, 0.02, 0.0); });
+    add("time_limit", "0.05", [](RenderSettings& s) { progressive(s, 0.0, 0.05); });
     return p;
   }
   int maxDepth = f.anyTransmissiveMaterial ? 16 : 8;
@@ -86,6 +111,10 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
       s.antialiasing = Antialiasing::Adaptive;
     });
   }
+  // Progressive sampling: a noise threshold E (linear RGB) and a time limit S (GPU seconds).
+  for (double e : {0.02, 0.01, 0.005, 0.0025})
+    add("noise_threshold", fmt(e), [e](RenderSettings& s) { progressive(s, e, 0.0); });
+  for (double t : {0.05, 0.1, 0.2, 0.4}) add("time_limit", fmt(t), [t](RenderSettings& s) { progressive(s, 0.0, t); });
   addEnum("numerics", Numerics::Naive, &RenderSettings::numerics);
   addEnum("numerics", Numerics::Robust, &RenderSettings::numerics);
   if (float64) addEnum("precision", Precision::Float64, &RenderSettings::precision);
@@ -122,6 +151,29 @@ std::vector<Point> pointsFor(const Features& f, const Scene& scene, bool quick, 
 
 } // namespace
 
+namespace {
+
+// One point of a scene: its settings, the counted render's figures, and every timed run.
+struct Measured {
+  std::string knob, value;
+  RenderSettings settings;
+  Image image;                    // the counted render's (the error is measured on it)
+  RayStats stats;                 // the counted render's
+  double sppMean = 0.0;           // progressive: the mean samples per pixel; otherwise the spp
+  std::vector<double> ms;         // GPU trace time of each timed run
+  std::vector<double> spp;        // time-limited points: each timed run's mean spp
+  std::vector<ImageError> errors; // time-limited points: each timed run's error (their images differ)
+};
+
+double minOf(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : *std::min_element(v.begin(), v.end());
+}
+double maxOf(const std::vector<double>& v) {
+  return v.empty() ? 0.0 : *std::max_element(v.begin(), v.end());
+}
+
+} // namespace
+
 int runBenchAccuracy(const BenchAccuracyArgs& args) {
   std::vector<std::filesystem::path> scenes = args.scenes;
   if (scenes.empty()) {
@@ -139,20 +191,36 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
 
   vulkan::Context context(contextOptions(args.device));
   const bool float64 = context.float64Enabled();
-  const int runs = args.quick ? 1 : args.runs;
-  const std::uint32_t height = args.quick ? 24 : args.height;
+  const int runs = args.quick ? 2 : args.runs;
+  const std::uint32_t height = args.countInstructions ? args.countHeight : args.quick ? 24 : args.height;
   const int refSpp = args.quick ? 16 : args.referenceSpp;
+  const bool counting = args.countInstructions;
+  if (counting && !VKRAY_HAVE_CALLGRIND)
+    throw InputError("--count-instructions",
+                     "this build has no valgrind/callgrind.h (Debian: valgrind); rebuild with it");
 
-  std::ofstream csv(args.out / "accuracy.csv");
-  if (!csv) throw InputError((args.out / "accuracy.csv").string(), "cannot write");
-  csv << "scene,knob,value,width,height,spp,max_depth,bailout,numerics,precision,fresnel,antialiasing,"
-         "trace_ms,trace_ms_min,rays,eye_rays,rmse,psnr_db,max_abs,share_off,pixels_off,rmse_1spp,share_off_1spp\n";
-  // Header of the run: stated with the figures.
-  std::ofstream meta(args.out / "run.txt");
-  meta << "device: " << context.info().name << "\ndriver: " << context.info().driver << "\nruns: " << runs
-       << " (median after one warm-up)\nheight: " << height << "\nreference spp: " << refSpp
-       << "\nreference precision: " << (float64 ? "float64" : "float32 (no shaderFloat64)") << "\n";
+  // --count-instructions: no timing and no reference; each point is rendered once to build its
+  // pipelines, then once more between callgrind's client requests, which dump that render's
+  // instructions to their own file named by the point (tools/accuracy-report --count-instructions
+  // runs this under callgrind and sums each dump's JIT code). Outside valgrind the requests do nothing.
+  const std::filesystem::path csvPath = args.out / (counting ? "instructions-points.csv" : "accuracy.csv");
+  std::ofstream csv(csvPath);
+  if (!csv) throw InputError(csvPath.string(), "cannot write");
+  if (counting) {
+    csv << "dump,scene,knob,value,width,height\n";
+  } else {
+    csv << "scene,knob,value,width,height,spp,max_depth,bailout,numerics,precision,fresnel,antialiasing,"
+           "texture_filter,noise_threshold,time_limit,spp_mean,runs,trace_ms,trace_ms_min,trace_ms_max,rays,eye_rays,"
+           "rmse,rmse_min,rmse_max,psnr_db,max_abs,share_off,pixels_off,rmse_1spp,share_off_1spp\n";
+    // Header of the run: stated with the figures.
+    std::ofstream meta(args.out / "run.txt");
+    meta << "device: " << context.info().name << "\ndriver: " << context.info().driver << "\nruns: " << runs
+         << " interleaved (run r of every point of a scene before run r+1 of any; one warm-up round)\nheight: "
+         << height << "\nreference spp: " << refSpp
+         << "\nreference precision: " << (float64 ? "float64" : "float32 (no shaderFloat64)") << "\n";
+  }
 
+  int dump = 0;
   for (const auto& path : scenes) {
     Scene scene = loadScene(path);
     double aspect = static_cast<double>(scene.render.width) / scene.render.height;
@@ -160,6 +228,8 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     scene.render.width = static_cast<std::uint32_t>(std::max(1.0, std::round(height * aspect)));
     scene.render.spp = 1;
     scene.render.antialiasing = Antialiasing::Stratified;
+    scene.render.noiseThreshold = 0.0;
+    scene.render.timeLimit = 0.0;
     const std::string name = path.stem().string();
     std::fprintf(stderr, "%s: %ux%u\n", name.c_str(), scene.render.width, scene.render.height);
 
@@ -168,6 +238,37 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     renderer.setScene(scene, features);
     RenderOptions options;
     options.countStats = false;
+    RenderOptions counted = options;
+    counted.countStats = true;
+
+    std::vector<Measured> points;
+    for (const Point& p : pointsFor(features, scene, args.quick, float64)) {
+      Measured m;
+      m.knob = p.knob;
+      m.value = p.value;
+      m.settings = scene.render;
+      p.apply(m.settings);
+      points.push_back(std::move(m));
+    }
+
+    if (counting) {
+      for (Measured& m : points) {
+        // A time limit's cost is its limit, and under valgrind it would stop after far fewer samples.
+        if (m.settings.timeLimit > 0.0) continue;
+        renderer.render(scene.camera, m.settings, options); // builds the pipelines, uncounted
+        const std::string label = "point " + std::to_string(++dump);
+        CALLGRIND_START_INSTRUMENTATION;
+        CALLGRIND_ZERO_STATS;
+        renderer.render(scene.camera, m.settings, options);
+        CALLGRIND_DUMP_STATS_AT(label.c_str());
+        CALLGRIND_STOP_INSTRUMENTATION;
+        csv << dump << ',' << name << ',' << m.knob << ",\"" << m.value << "\"," << m.settings.width << ','
+            << m.settings.height << '\n';
+        csv.flush();
+        std::fprintf(stderr, "  %-15s %-22s counted (%s)\n", m.knob.c_str(), m.value.c_str(), label.c_str());
+      }
+      continue;
+    }
 
     // The reference: deep, many samples, robust, float64 where the device has it, and a bailout of
     // 1e-6 rather than 0: at depth 16 a glass tree without bailout has up to 2^17 rays per sample,
@@ -182,8 +283,6 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     ref.fresnel = FresnelMode::Exact;
     ref.textureFilter = TextureFilter::Nearest; // point samples: their mean is the filtered texture
     ref.precision = float64 ? Precision::Float64 : Precision::Float32;
-    RenderOptions counted = options;
-    counted.countStats = true;
     RenderResult reference = renderer.render(scene.camera, ref, counted);
     if (reference.stats.truncated > 0) {
       throw Error(name + ": the reference lost " + std::to_string(reference.stats.truncated) +
@@ -195,44 +294,85 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
     RenderSettings ref1 = ref;
     ref1.spp = 1;
     Image reference1 = renderer.render(scene.camera, ref1, options).image;
-    auto row = [&](const std::string& knob, const std::string& value, const RenderSettings& s, const TimedRender& t,
-                   const ImageError& e, const ImageError& e1) {
+
+    // One counted render of each point (its image, error and rays; it also builds the pipelines),
+    // one untimed warm-up round, then the timed runs interleaved: run r of every point before run
+    // r + 1 of any, so a slow spell of the shared machine spreads over all points instead of
+    // landing on a few, and each point's min, median and max show how far its time can be trusted.
+    for (Measured& m : points) {
+      RenderResult r = renderer.render(scene.camera, m.settings, counted);
+      m.image = std::move(r.image);
+      m.stats = r.stats;
+      m.sppMean = r.progressive.passes > 0 ? r.progressive.sppMean : m.settings.spp;
+    }
+    for (int run = -1; run < runs; ++run) {
+      for (Measured& m : points) {
+        RenderResult r = renderer.render(scene.camera, m.settings, options);
+        if (run < 0) continue;
+        m.ms.push_back(r.timings.traceMs);
+        if (m.settings.timeLimit > 0.0) { // the samples a time limit allows vary run by run
+          m.errors.push_back(compareImages(r.image, reference.image));
+          m.spp.push_back(r.progressive.sppMean);
+        }
+      }
+    }
+
+    auto row = [&](const std::string& knob, const std::string& value, const RenderSettings& s, double sppMean,
+                   int timedRuns, const std::vector<double>& ms, const RayStats& stats, const ImageError& e,
+                   double rmseMin, double rmseMax, const ImageError& e1) {
       csv << name << ',' << knob << ",\"" << value << "\"," << s.width << ',' << s.height << ',' << s.spp << ','
           << s.maxDepth << ',' << fmt(s.bailout) << ',' << enumName(s.numerics) << ',' << enumName(s.precision) << ','
-          << enumName(s.fresnel) << ',' << enumName(s.antialiasing) << ',' << fmt(t.medianMs) << ',' << fmt(t.minMs)
-          << ',' << t.stats.total() << ',' << t.stats.eye << ',' << fmt(e.rmse) << ','
+          << enumName(s.fresnel) << ',' << enumName(s.antialiasing) << ',' << enumName(s.textureFilter) << ','
+          << fmt(s.noiseThreshold) << ',' << fmt(s.timeLimit) << ',' << fmt(sppMean) << ',' << timedRuns << ','
+          << fmt(median(ms)) << ',' << fmt(minOf(ms)) << ',' << fmt(maxOf(ms)) << ',' << stats.total() << ','
+          << stats.eye << ',' << fmt(e.rmse) << ',' << fmt(rmseMin) << ',' << fmt(rmseMax) << ','
           << (std::isinf(e.psnr) ? std::string("inf") : fmt(e.psnr)) << ',' << fmt(e.maxAbs) << ','
           << fmt(e.fractionOff) << ',' << e.pixelsOff << ',' << fmt(e1.rmse) << ',' << fmt(e1.fractionOff) << '\n';
       csv.flush();
     };
     {
-      TimedRender t = timeRender(renderer, scene, ref, options, 1, args.quick ? 1 : std::min(runs, 3));
+      // The reference is not timed again (it is the longest render by far): its time is that of
+      // its one counted render, `runs` 0 says so.
       ImageError none;
       none.psnr = std::numeric_limits<double>::infinity();
-      row("reference", "reference", ref, t, none, none);
+      std::vector<double> once{reference.timings.traceMs};
+      row("reference", "reference", ref, ref.spp, 0, once, reference.stats, none, 0.0, 0.0, none);
     }
 
     float heatScale = 0.05f;
-    for (const Point& p : pointsFor(features, scene, args.quick, float64)) {
-      RenderSettings s = scene.render;
-      p.apply(s);
-      TimedRender t = timeRender(renderer, scene, s, options, 1, runs);
-      ImageError e = compareImages(t.image, reference.image);
-      bool oneSample = s.spp == 1;
-      ImageError e1 = oneSample ? compareImages(t.image, reference1) : e;
-      row(p.knob, p.value, s, t, e, e1);
-      std::fprintf(stderr, "  %-10s %-22s %9.2f ms  rmse %.5f  off %.4f  (1 spp: rmse %.5f off %.4f)\n", p.knob.c_str(),
-                   p.value.c_str(), t.medianMs, e.rmse, e.fractionOff, e1.rmse, e1.fractionOff);
+    for (Measured& m : points) {
+      const RenderSettings& s = m.settings;
+      ImageError e = compareImages(m.image, reference.image);
+      double rmseMin = e.rmse, rmseMax = e.rmse;
+      double sppMean = m.sppMean;
+      if (!m.errors.empty()) { // time-limited: the run of median error stands for the point
+        std::vector<std::size_t> order(m.errors.size());
+        for (std::size_t i = 0; i < order.size(); ++i) order[i] = i;
+        std::sort(order.begin(), order.end(),
+                  [&](std::size_t a, std::size_t b) { return m.errors[a].rmse < m.errors[b].rmse; });
+        e = m.errors[order[order.size() / 2]];
+        rmseMin = m.errors[order.front()].rmse;
+        rmseMax = m.errors[order.back()].rmse;
+        sppMean = median(m.spp);
+      }
+      bool oneSample = s.spp == 1 && !s.progressive();
+      ImageError e1 = oneSample ? compareImages(m.image, reference1) : e;
+      row(m.knob, m.value, s, sppMean, static_cast<int>(m.ms.size()), m.ms, m.stats, e, rmseMin, rmseMax, e1);
+      std::fprintf(stderr, "  %-15s %-22s %9.2f ms [%.2f, %.2f]  rmse %.5f  off %.4f  (1 spp: rmse %.5f off %.4f)\n",
+                   m.knob.c_str(), m.value.c_str(), median(m.ms), minOf(m.ms), maxOf(m.ms), e.rmse, e.fractionOff,
+                   e1.rmse, e1.fractionOff);
       // Heat maps of where the error is, for the points the report discusses.
-      bool telling = (p.knob == "numerics" && p.value == enumName(Numerics::Naive)) ||
-                     (p.knob == "depth" && (p.value == "1" || p.value == "2")) || (p.knob == "spp" && p.value == "1") ||
-                     (p.knob == "bailout" && p.value == "1/16") ||
-                     (p.knob == "fresnel" && p.value == enumName(FresnelMode::Schlick)) ||
-                     (p.knob == "adaptive" && p.value == "16");
+      const std::string& knob = m.knob;
+      const std::string& value = m.value;
+      bool telling = (knob == "numerics" && value == enumName(Numerics::Naive)) ||
+                     (knob == "depth" && (value == "1" || value == "2")) || (knob == "spp" && value == "1") ||
+                     (knob == "bailout" && value == "1/16") ||
+                     (knob == "fresnel" && value == enumName(FresnelMode::Schlick)) ||
+                     (knob == "adaptive" && value == "16") || (knob == "noise_threshold" && value == "0.01");
       if (telling && !args.quick) {
-        Image map = errorMap(t.image, oneSample ? reference1 : reference.image);
+        Image map = errorMap(m.image, oneSample ? reference1 : reference.image);
         for (auto& px : map.pixels) px = heat(px.x, heatScale);
-        std::string file = name + "-error-" + p.knob + "-" + p.value + ".png";
+        std::string file = name + "-error-" + knob + "-" + value + ".png";
         std::replace(file.begin(), file.end(), '/', '_');
         std::replace(file.begin(), file.end(), ' ', '_');
         // Heat maps are already display colours: store them so the PNG shows them as computed.
@@ -241,7 +381,7 @@ int runBenchAccuracy(const BenchAccuracyArgs& args) {
       }
     }
   }
-  std::fprintf(stderr, "wrote %s\n", (args.out / "accuracy.csv").string().c_str());
+  std::fprintf(stderr, "wrote %s\n", csvPath.string().c_str());
   return 0;
 }
 

@@ -141,11 +141,16 @@ int main(int argc, char** argv) {
                           "scene files (default: showcase, glass, seed, numerics-cracks, numerics-far-sphere, "
                           "numerics-huge-ground, textured)");
   benchAccCmd->add_option("--out", benchAcc.out, "output directory (CSV, reference and heat-map images)");
-  benchAccCmd->add_option("--runs", benchAcc.runs, "timed runs per point")->check(CLI::Range(1, 1000));
+  benchAccCmd->add_option("--runs", benchAcc.runs, "timed runs per point, interleaved")->check(CLI::Range(1, 1000));
   benchAccCmd->add_option("--height", benchAcc.height, "image height (aspect kept)")->check(CLI::Range(8, 4096));
   benchAccCmd->add_option("--reference-spp", benchAcc.referenceSpp, "samples per pixel of the reference")
       ->check(CLI::Range(1, 4096));
   benchAccCmd->add_flag("--quick", benchAcc.quick, "tiny images and few points (seconds)");
+  benchAccCmd->add_flag("--count-instructions", benchAcc.countInstructions,
+                        "under callgrind: render each point once at --count-height between client requests, no "
+                        "timing (tools/accuracy-report --count-instructions)");
+  benchAccCmd->add_option("--count-height", benchAcc.countHeight, "image height of --count-instructions")
+      ->check(CLI::Range(8, 4096));
   addDeviceFlags(*benchAccCmd, benchAcc.device);
 
   BenchAdaptiveArgs benchAdaptive;
