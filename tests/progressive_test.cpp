@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include "render/adaptive.h"
+#include "scene/scene_loader.h"
 #include "test_support.h"
 #include "util/error.h"
 
@@ -213,6 +214,25 @@ TEST(RenderProgressive, PixelStatisticsDoNotChangeTheImage) {
   EXPECT_LT(worst, 1e-5);
   double rays = std::accumulate(r.pixels.rays.begin(), r.pixels.rays.end(), 0.0);
   EXPECT_EQ(rays, static_cast<double>(r.stats.total())); // the per-pixel counts add up
+}
+
+TEST(RenderProgressive, ListPassesStartFromTheEntryPointsOfTheWholeImage) {
+  // A scene with a BVH: the list pass's lanes read the entry points of their own pixels' tiles,
+  // found once for the whole image, and find the same hits as the banded sample pass.
+  Scene s = loadScene(scenePath("meshes.json"));
+  s.render.width = 64;
+  s.render.height = 48;
+  s.render.spp = 4;
+  RenderResult plain = render(s);
+  ASSERT_TRUE(plain.features.useBvh);
+  RenderOptions o;
+  o.pixelStats = true;
+  RenderResult r = render(s, o);
+  double worst = 0.0;
+  for (std::size_t i = 0; i < plain.image.pixels.size(); ++i)
+    worst = std::max(worst, maxChannelDiff(plain.image.pixels[i], r.image.pixels[i]));
+  EXPECT_LT(worst, 1e-5);
+  EXPECT_EQ(r.stats.total(), plain.stats.total()); // the same rays, from the same hits
 }
 
 TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) {

@@ -112,7 +112,13 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
       p->rays = r.stats.total();
       p->sppMean = r.progressive.passes > 0 ? r.progressive.sppMean : p->settings.spp;
     }
-    for (int run = 0; run < args.runs; ++run) {
+    // One untimed round first: a point's first uncounted render builds its pipeline and wakes
+    // the driver's caches (first runs measured up to 4x the median).
+    for (int run = -1; run < args.runs; ++run) {
+      if (run < 0) {
+        for (Point* p : all) renderer.render(scene.camera, p->settings, options);
+        continue;
+      }
       for (Point* p : all) p->ms.push_back(renderer.render(scene.camera, p->settings, options).timings.traceMs);
     }
 

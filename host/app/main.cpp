@@ -166,6 +166,7 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096));
   benchAdaptiveCmd->add_option("--thresholds", benchAdaptive.thresholds, "noise thresholds, comma-separated")
       ->delimiter(',')
+      ->allow_extra_args(false) // one argument, split at the commas: the scenes that follow stay scenes
       ->check(positiveReal(1e6));
   benchAdaptiveCmd->add_option("--min-spp", benchAdaptive.minSpp, "the thresholds' min_spp")
       ->check(CLI::Range(1, 4096));

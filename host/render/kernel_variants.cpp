@@ -40,8 +40,7 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecHasPolygons, all || f.polygons);
   const bool useBvh = f.useBvh && shape.hasBvh;
   spec.set(gpu::kSpecUseBvh, useBvh);
-  // A list pass's lanes hold pixels from anywhere in the image: no tile to share entry points.
-  spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints && !listPass);
+  spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints);
   spec.set(gpu::kSpecShadows, all || f.shadows);
   spec.set(gpu::kSpecReflection, all || f.reflection);
   spec.set(gpu::kSpecRefraction, all || f.refraction);
@@ -95,10 +94,12 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
         o.foldSpirv ? vulkan::SpecializationFolding::FoldSpirv : vulkan::SpecializationFolding::DriverOnly};
   };
   if (progressiveRender(s, o) && o.kernel == Kernel::Shade) {
-    // Progressive passes over lists of open pixels (host/render/adaptive.h): one pipeline, no
-    // row culling or entry points (the lanes hold pixels from anywhere in the image).
+    // Progressive passes over lists of open pixels (host/render/adaptive.h): one pipeline, with
+    // entry points found once for the whole image, and no row culling (a row that sees nothing
+    // converges in min_spp samples of one missed eye ray each).
     plan.sample = key(o, false, false, true);
     plan.countStats = o.countStats;
+    plan.entryPoints = f.useBvh && shape.hasBvh && o.entryPoints;
     return plan;
   }
   plan.sample = key(o, center, false);

@@ -175,11 +175,21 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   const std::uint32_t traceBegin = rowBegin > margin ? rowBegin - margin : 0;
   const std::uint32_t traceEnd = std::min(settings.height, rowEnd + margin);
   ProgressiveImage acc(width, settings.height);
+  // The list in the order the sample pass's lanes take pixels: 8 x 8 tiles, row by row, each in
+  // 4 x 2 blocks (camera.glsl, invocationPixel), so eight neighbouring list entries are a compact
+  // block of the image while they are all open, and their rays walk the same BVH nodes.
   std::vector<std::uint32_t> open;
   open.reserve(static_cast<std::size_t>(width) * (traceEnd - traceBegin));
-  for (std::uint32_t y = traceBegin; y < traceEnd; ++y)
-    for (std::uint32_t x = 0; x < width; ++x) open.push_back(y * width + x);
+  for (std::uint32_t ty = traceBegin / 8 * 8; ty < traceEnd; ty += 8)
+    for (std::uint32_t tx = 0; tx < width; tx += 8)
+      for (std::uint32_t by = 0; by < 8; by += 2)
+        for (std::uint32_t bx = 0; bx < 8; bx += 4)
+          for (std::uint32_t j = 0; j < 8; ++j) {
+            const std::uint32_t x = tx + bx + (j & 3u), y = ty + by + (j >> 2);
+            if (x < width && y >= traceBegin && y < traceEnd) open.push_back(y * width + x);
+          }
   const double totalPixels = static_cast<double>(open.size());
+  if (kernels_.entry) result.timings.traceMs += findEntryPointsOfTheWholeImage(settings);
 
   // Two texels of output per entry; the list itself goes to the pass input (prevImage_).
   const std::size_t capacity =
@@ -289,6 +299,34 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
     result.progressive.converged =
         1.0 - static_cast<double>(stillOpen) / (static_cast<double>(width) * (rowEnd - rowBegin));
   }
+}
+
+double Renderer::findEntryPointsOfTheWholeImage(const RenderSettings& settings) {
+  const vk::DeviceSize bytes = entryTileCount(settings.width, settings.height) * 2 * sizeof(glm::uvec4);
+  if (entryPoints_->size() < bytes) {
+    entryPoints_.reset();
+    entryPoints_ =
+        std::make_unique<vulkan::Buffer>(context_, bytes, vk::Format::eR32G32B32A32Uint, vulkan::MemoryUse::DeviceLocal,
+                                         "entry points", vk::BufferUsageFlagBits::eStorageBuffer);
+    updateDescriptors();
+  }
+  gpu::PushConstants push{};
+  push.tileSize = glm::uvec2(settings.width, settings.height);
+  const std::uint32_t tiles = entryTileCount(settings.width, settings.height);
+  BandTimes t =
+      submitBand(context_, timer_, "finding entry points", 0, settings.height, [&](const vk::raii::CommandBuffer& cmd) {
+        cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
+        cmd.bindPipeline(vk::PipelineBindPoint::eCompute, kernels_.entry->handle());
+        timer_.start(cmd);
+        cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+        cmd.dispatch((tiles + 63) / 64, 1, 1);
+        timer_.stop(cmd);
+        // The passes' reads, in later submissions, come after these writes.
+        vk::MemoryBarrier written(vk::AccessFlagBits::eShaderWrite, vk::AccessFlagBits::eShaderRead);
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {},
+                            written, {}, {});
+      });
+  return t.gpuMs;
 }
 
 void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, const RenderSettings& settings,

@@ -80,6 +80,10 @@ private:
   // Progressive passes over lists of open pixels (adaptive.h): the noise threshold, the time
   // limit, per-pixel statistics.
   void renderProgressive(const RenderSettings& settings, const RenderOptions& options, RenderResult& result);
+  // shaders/entry.comp over the whole image (the list pass's lanes read any tile's), before a
+  // progressive render's first pass; grows the entry-point buffer to hold every tile. Returns its
+  // GPU time (part of the trace's).
+  double findEntryPointsOfTheWholeImage(const RenderSettings& settings);
   // pixelTexels: RGBA32F texels per pixel of the window (2 for Kernel::Aov, else 1).
   // pixelRays: a ray count per pixel of the window too (options.pixelRays).
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev,
