@@ -273,6 +273,7 @@ void listPass() {
   uint entry = gl_WorkGroupID.x * (kWorkgroupSizeX * kWorkgroupSizeY) + gl_LocalInvocationIndex;
   if (entry >= pc.tileSize.x) return;
   uvec2 pixel = uvec2(imageLoad(prevTexels, int(entry)).xy);
+  loadEntryPoints(pixel, 0u); // the host found them for the whole image, per lane's own tile
   uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
   uint count = opaqueUniform(pc.sampleCount);
   // The sums start from the entry's earlier dispatches of this pass: each sample is added to the
