@@ -63,6 +63,10 @@ void readCameraKeys(const JsonNode& node, Animation& a) {
   int previous = -1;
   for (std::size_t i = 0; i < node.size(); ++i) {
     JsonNode key = node[i];
+    // The lens is the camera's, fixed over the frames (an unset focus_distance follows look_at).
+    for (const char* lens : {"aperture", "focus_distance"}) {
+      if (auto v = key.find(lens)) v->fail("is not animated; give it in camera (the same for every frame)");
+    }
     key.allowKeys({"frame", "position", "look_at", "up", "fov_y"});
     int f = readFrame(key, a.frames, previous);
     previous = f;

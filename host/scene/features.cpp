@@ -74,6 +74,9 @@ Features analyzeScene(const Scene& scene, const RenderSettings& settings) {
   f.polygons = !scene.polygons.empty();
   f.smoothNormals = std::any_of(scene.triangles.begin(), scene.triangles.end(),
                                 [](const Triangle& t) { return t.normals.has_value(); });
+  f.thinLens = scene.camera.aperture > 0.0;
+  f.aperture = scene.camera.aperture;
+  f.focusDistance = scene.camera.focusDistanceOrDefault();
   f.textures = std::any_of(scene.triangles.begin(), scene.triangles.end(), [&](const Triangle& t) {
     return t.uvs.has_value() && scene.materials[t.material].baseColorTexture.has_value();
   });
@@ -142,6 +145,10 @@ std::vector<std::string> Features::explain() const {
   if (textures) lines.push_back("textures: on (base-colour textures on triangles; sampling compiled in)");
   if (vertexColors) lines.push_back("vertex colours: on (they multiply the base colour)");
   if (alphaMask) lines.push_back("alpha mask: on (cut-out triangles, for shadow rays too)");
+  if (thinLens) {
+    lines.push_back("depth of field: on (thin lens, radius " + fmt(aperture) + ", in focus at " + fmt(focusDistance) +
+                    "; BVH entry points and row culling off)");
+  }
 
   if (shadows) {
     std::string line = "shadows: on (" + plural(static_cast<std::size_t>(shadowLights), "light") + ")";

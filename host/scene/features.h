@@ -21,6 +21,11 @@ struct Features {
   bool textures = false;      // some material has a base-colour texture and some triangle uvs for it
   bool vertexColors = false;  // some triangle has vertex colours (glTF COLOR_0)
   bool alphaMask = false;     // some triangle's material cuts out by alpha (glTF alphaMode MASK)
+  // The camera has a thin lens (camera.aperture > 0): depth of field. Its eye rays do not all pass
+  // through the eye, so the pinhole-only shortcuts (entry points, row culling) are off.
+  bool thinLens = false;
+  double aperture = 0.0;      // lens radius
+  double focusDistance = 0.0; // of the plane in focus
 
   // Shadows: lights that ask for them, and whether anything could block them at all (a single
   // convex object cannot shadow itself: lights behind a surface are skipped before any ray).

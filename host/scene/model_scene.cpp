@@ -54,6 +54,8 @@ void refitCamera(Scene& scene) {
   Camera fitted = fitCamera(sceneBounds(scene), *scene.fitFrom, scene.camera.fovY,
                             static_cast<double>(scene.render.width) / scene.render.height, scene.path.string());
   fitted.up = scene.camera.up;
+  fitted.aperture = scene.camera.aperture;
+  fitted.focusDistance = scene.camera.focusDistance;
   scene.camera = fitted;
 }
 

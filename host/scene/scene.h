@@ -25,6 +25,12 @@ struct Camera {
   glm::dvec3 lookAt{0.0, 0.0, 0.0};
   glm::dvec3 up{0.0, 1.0, 0.0};
   double fovY = 45.0; // degrees, vertical
+  // Thin lens (depth of field): the lens radius in world units, 0 for the pinhole, and the distance
+  // of the plane in focus along the view direction; unset: the distance to lookAt, so it follows an
+  // animated camera's look_at.
+  double aperture = 0.0;
+  std::optional<double> focusDistance;
+  double focusDistanceOrDefault() const { return focusDistance.value_or(glm::length(lookAt - position)); }
 };
 
 enum class Numerics { Robust, Naive };

@@ -49,7 +49,7 @@ dvec3 readPoint(const JsonNode& node) {
 // A camera placed by hand, or `"fit": true` (optionally `"from"`: the direction it looks from),
 // placed after the objects are read (model_scene.h: fitCamera). Returns whether it is to be fitted.
 bool readCamera(const JsonNode& node, Camera& camera, glm::dvec3& fitFrom) {
-  node.allowKeys({"position", "look_at", "up", "fov_y", "fit", "from"});
+  node.allowKeys({"position", "look_at", "up", "fov_y", "fit", "from", "aperture", "focus_distance"});
   bool fit = false;
   if (auto f = node.find("fit")) fit = f->boolean();
   if (fit) {
@@ -68,6 +68,17 @@ bool readCamera(const JsonNode& node, Camera& camera, glm::dvec3& fitFrom) {
     if (!(camera.fovY > 0.0 && camera.fovY < 180.0)) {
       fov->fail("must be in (0, 180) degrees, got " + formatNumber(camera.fovY));
     }
+  }
+  if (auto a = node.find("aperture")) {
+    camera.aperture = a->number();
+    if (!(std::isfinite(camera.aperture) && camera.aperture >= 0.0)) {
+      a->fail("must be a finite lens radius >= 0 (0: pinhole), got " + formatNumber(camera.aperture));
+    }
+  }
+  if (auto d = node.find("focus_distance")) {
+    double focus = d->number();
+    if (!(std::isfinite(focus) && focus > 0.0)) d->fail("must be > 0, got " + formatNumber(focus));
+    camera.focusDistance = focus;
   }
   if (fit) {
     if (glm::length(glm::cross(glm::normalize(fitFrom), glm::normalize(camera.up))) < 1e-9) {
@@ -504,6 +515,8 @@ Scene buildScene(const nlohmann::json& doc, const std::string& name, const std::
     double aspect = static_cast<double>(scene.render.width) / scene.render.height;
     Camera fitted = fitCamera(sceneBounds(scene), fitFrom, scene.camera.fovY, aspect, name + ": camera.fit");
     fitted.up = scene.camera.up;
+    fitted.aperture = scene.camera.aperture;
+    fitted.focusDistance = scene.camera.focusDistance;
     scene.camera = fitted;
     scene.fitFrom = fitFrom;
   }

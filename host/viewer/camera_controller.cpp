@@ -160,6 +160,14 @@ std::string cameraJson(const Camera& camera) {
   appendVec3(out, camera.up);
   out += ", \"fov_y\": ";
   appendNumber(out, camera.fovY);
+  if (camera.aperture > 0.0) { // a pinhole's line stays as it was
+    out += ", \"aperture\": ";
+    appendNumber(out, camera.aperture);
+  }
+  if (camera.focusDistance) {
+    out += ", \"focus_distance\": ";
+    appendNumber(out, *camera.focusDistance);
+  }
   out += " }";
   return out;
 }
