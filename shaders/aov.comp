@@ -31,6 +31,8 @@ void main() {
   if (!all(lessThan(local, pc.tileSize)) || !all(lessThan(pixel, frame.imageSize))) return;
   loadEntryPoints(pixel, pc.imageRow0);
 
+  // The pinhole's ray through the pixel centre, whatever camera.aperture: one sharp ray per pixel
+  // (a thin lens blurs only the shading kernel's image, trace.comp's traceSample).
   vec3 dir = eyeRayDir(vec2(pixel) + 0.5);
   TraceRay r = makeTraceRay(frame.cameraOrigin.xyz, dir);
   Hit h = traceScene(r, kInfinity, false, false, true);

@@ -13,7 +13,8 @@
 // waiting on its stack and the children just found fit kEntryPointsMax, and keeps a node whole
 // where they would not. The result, nearest first, is written as the walk's starting state
 // (gpu_types.h): an eye ray then finds exactly the hit it would find from the root, having
-// skipped the levels above the entry points and every subtree outside its tile.
+// skipped the levels above the entry points and every subtree outside its tile. Pinhole rays only:
+// with a thin lens (THIN_LENS) eye rays start off the eye, and the host does not run this pass.
 #version 460
 #extension GL_GOOGLE_include_directive : require
 

@@ -176,8 +176,17 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   return radiance;
 }
 
-vec3 traceSample(uvec2 pixel, vec2 offset) {
-  vec3 radiance = traceRadiance(frame.cameraOrigin.xyz, eyeRayDir(vec2(pixel) + offset));
+// One sample: the eye ray through `offset` in the pixel, from the eye (the pinhole) or, THIN_LENS,
+// from the lens point `lensUv` (lensSample: the sample's own point, decorrelated from the offset).
+vec3 traceSample(uvec2 pixel, vec2 offset, vec2 lensUv) {
+  vec3 origin = frame.cameraOrigin.xyz;
+  vec3 dir;
+  if (THIN_LENS) {
+    thinLensRay(vec2(pixel) + offset, lensUv, origin, dir);
+  } else {
+    dir = eyeRayDir(vec2(pixel) + offset);
+  }
+  vec3 radiance = traceRadiance(origin, dir);
   if (!isFiniteVec(radiance)) {
     if (COUNT_STATS) gCount.nonFinite++;
     radiance = vec3(0.0);
@@ -193,7 +202,8 @@ vec3 sampleSum(uvec2 pixel, uint pixelIndex, uint base, uint count, bool center)
   uint k = 0u;
   while (true) {
     vec2 offset = (CENTER_SAMPLE || center) ? vec2(0.5) : sobolOwenSample(base + k, hashPcg(pixelIndex));
-    sum += traceSample(pixel, offset);
+    vec2 lensUv = THIN_LENS ? lensSample(base + k, hashPcg(pixelIndex)) : vec2(0.0);
+    sum += traceSample(pixel, offset, lensUv);
     ++k;
     if (k >= count) break;
   }
@@ -287,7 +297,8 @@ void listPass() {
   }
   uint k = 0u;
   while (true) { // tested at the bottom, as in sampleSum
-    vec3 radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)));
+    vec2 lensUv = THIN_LENS ? lensSample(pc.sampleBase + k, hashPcg(index)) : vec2(0.0);
+    vec3 radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)), lensUv);
     first.rgb += radiance;
     second.rgb += radiance * radiance;
     ++k;

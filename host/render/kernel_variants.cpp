@@ -40,7 +40,8 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecHasPolygons, all || f.polygons);
   const bool useBvh = f.useBvh && shape.hasBvh;
   spec.set(gpu::kSpecUseBvh, useBvh);
-  spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints);
+  // Entry points are found for rays from the eye point; a lens's eye rays start off it.
+  spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints && !f.thinLens);
   spec.set(gpu::kSpecShadows, all || f.shadows);
   spec.set(gpu::kSpecReflection, all || f.reflection);
   spec.set(gpu::kSpecRefraction, all || f.refraction);
@@ -63,6 +64,9 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecRefinePass, refinePass);
   spec.set(gpu::kSpecListPass, listPass);
   spec.set(gpu::kSpecPixelRays, o.pixelRays && !refinePass && !listPass);
+  // The camera's, not an effect's: on exactly when the scene has an aperture, even in the
+  // all-features pipeline, whose images must equal the specialized ones.
+  spec.set(gpu::kSpecThinLens, f.thinLens);
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
   // pipeline keeps every count a runtime value.
   auto count = [&](std::size_t n) {
@@ -99,7 +103,7 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
     // converges in min_spp samples of one missed eye ray each).
     plan.sample = key(o, false, false, true);
     plan.countStats = o.countStats;
-    plan.entryPoints = f.useBvh && shape.hasBvh && o.entryPoints;
+    plan.entryPoints = f.useBvh && shape.hasBvh && o.entryPoints && !f.thinLens;
     return plan;
   }
   plan.sample = key(o, center, false);
@@ -113,9 +117,10 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
   }
   if (adaptive) plan.refine = key(o, false, true);
   // Counting each pixel's rays needs every pixel traced: the fill writes no counts.
-  plan.fill = o.cullRows && !o.pixelRays && o.kernel == Kernel::Shade;
+  // Row culling proves rows empty for rays from the eye point alone: off with a thin lens.
+  plan.fill = o.cullRows && !o.pixelRays && o.kernel == Kernel::Shade && !f.thinLens;
   plan.countStats = o.countStats;
-  plan.entryPoints = f.useBvh && shape.hasBvh && o.entryPoints;
+  plan.entryPoints = f.useBvh && shape.hasBvh && o.entryPoints && !f.thinLens;
   return plan;
 }
 

@@ -498,7 +498,7 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.cameraForward = glm::vec4(glm::vec3(cam.forward), 0.0f);
   p.cameraRight = glm::vec4(glm::vec3(cam.right * (cam.tanHalfFovY * cam.aspect)), 0.0f);
   p.cameraUp = glm::vec4(glm::vec3(cam.up * cam.tanHalfFovY), 0.0f);
-  p.cameraOrigin = glm::vec4(glm::vec3(camera.position - g.origin), 0.0f);
+  p.cameraOrigin = glm::vec4(glm::vec3(camera.position - g.origin), static_cast<float>(camera.aperture));
   p.worldOffset = glm::vec4(glm::vec3(g.origin), 0.0f);
   p.background = glm::vec4(glm::vec3(g.background), 0.0f);
   p.ambientLight = glm::vec4(glm::vec3(g.ambientLight), 0.0f);
@@ -506,6 +506,7 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.adaptiveThreshold = static_cast<float>(s.adaptiveThreshold);
   // A pixel's angle (RTG ch. 20, eq. 20.30: atan(2 tan(fov / 2) / height)), the eye rays' cone.
   p.coneSpread = static_cast<float>(std::atan(2.0 * cam.tanHalfFovY / s.height));
+  p.focusDistance = static_cast<float>(camera.focusDistanceOrDefault());
   p.imageSize = glm::uvec2(s.width, s.height);
   // Depth beyond what the weights can reach changes nothing; the specialized kernel stops there.
   p.maxDepth = static_cast<std::uint32_t>(f.reflection ? f.usableDepth : 0);

@@ -1,5 +1,5 @@
-// The pinhole camera: which pixel an invocation traces and the eye ray through a point of the image
-// plane.
+// The camera: which pixel an invocation traces, the pinhole's eye ray through a point of the image
+// plane, and the thin lens's (THIN_LENS: depth of field).
 #ifndef VKRAY_CAMERA_GLSL
 #define VKRAY_CAMERA_GLSL
 
@@ -25,5 +25,37 @@ vec3 imagePlaneDir(vec2 pixelPos) {
 
 // The same ray's unit direction.
 vec3 eyeRayDir(vec2 pixelPos) { return normalize(imagePlaneDir(pixelPos)); }
+
+// A point of [0, 1)^2 mapped to the unit disk, area-preserving and with little distortion, so the
+// sample sequence's stratification carries over to the lens (Shirley & Chiu, "A Low Distortion Map
+// Between Disk and Square", 1997; the form of pbrt-v4's SampleUniformDiskConcentric).
+vec2 concentricDisk(vec2 u) {
+  vec2 o = 2.0 * u - 1.0;
+  if (o.x == 0.0 && o.y == 0.0) return vec2(0.0);
+  const float kQuarterPi = 0.78539816339;
+  float r, theta;
+  if (abs(o.x) > abs(o.y)) {
+    r = o.x;
+    theta = kQuarterPi * (o.y / o.x);
+  } else {
+    r = o.y;
+    theta = 2.0 * kQuarterPi - kQuarterPi * (o.x / o.y);
+  }
+  return r * vec2(cos(theta), sin(theta));
+}
+
+// The thin lens's eye ray through a point of the image plane: it starts at the lens point `lensUv`
+// (in [0, 1)^2, mapped to the disk of radius frame.cameraOrigin.w around the eye, in the plane of
+// cameraRight and cameraUp) and passes through the point the pinhole ray meets on the plane in focus
+// (frame.focusDistance along cameraForward), so that plane stays sharp and everything else blurs by
+// the thin-lens circle of confusion (pbrt-v4, PerspectiveCamera::GenerateRay). Unit direction.
+void thinLensRay(vec2 pixelPos, vec2 lensUv, out vec3 origin, out vec3 dir) {
+  vec3 d = imagePlaneDir(pixelPos); // cameraForward is a unit vector: d's depth along it is 1
+  vec3 focus = frame.focusDistance * d;
+  vec2 lens = frame.cameraOrigin.w * concentricDisk(lensUv);
+  vec3 offset = lens.x * normalize(frame.cameraRight.xyz) + lens.y * normalize(frame.cameraUp.xyz);
+  origin = frame.cameraOrigin.xyz + offset;
+  dir = normalize(focus - offset);
+}
 
 #endif

@@ -53,4 +53,10 @@ vec2 sobolOwenSample(uint index, uint pixelSeed) {
   return vec2(float(x >> 8u), float(y >> 8u)) * (1.0 / 16777216.0);
 }
 
+// The thin lens's point for sample `index` of pixel `pixelSeed`, in [0, 1)^2: the same (0,2)-sequence
+// with other scrambling seeds. The index is shuffled by its own scramble, so a sample's lens point is
+// decorrelated from its sub-pixel offset, and each is stratified on its own (Burley 2020, sec. 4:
+// padding dimension pairs by independent shuffles).
+vec2 lensSample(uint index, uint pixelSeed) { return sobolOwenSample(index, hashPcg(pixelSeed ^ 0x68e31da4u)); }
+
 #endif

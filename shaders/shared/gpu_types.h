@@ -119,7 +119,11 @@ VKRAY_CONST(uint, kSpecListPass, 31u);
 // The sample pass adds each pixel's rays to PixelRays[] (kBindingPixelRays): the viewer's cost map.
 // Off in every headless pipeline, where the count and its store compile out.
 VKRAY_CONST(uint, kSpecPixelRays, 32u);
-VKRAY_CONST(uint, kSpecCount, 33u);
+// The camera has a thin lens (camera.aperture > 0): each sample's eye ray starts at a point of the
+// lens disk and passes through the plane in focus (depth of field). Off: the pinhole, and no lens
+// code at all, so a scene without an aperture renders bit for bit as before the lens existed.
+VKRAY_CONST(uint, kSpecThinLens, 33u);
+VKRAY_CONST(uint, kSpecCount, 34u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -397,15 +401,15 @@ struct FrameParams {
   vec4 cameraForward;      // xyz: unit view direction
   vec4 cameraRight;        // xyz: right * tan(fov_y / 2) * aspect
   vec4 cameraUp;           // xyz: up * tan(fov_y / 2)
-  vec4 cameraOrigin;       // xyz: eye position (camera-relative frame: 0); w: unused
+  vec4 cameraOrigin;       // xyz: eye position (camera-relative frame: 0); w: lens radius (0: pinhole)
   vec4 worldOffset;        // xyz: world position of the frame's origin (checker patterns use world space)
   vec4 background;         // rgb: colour of rays that miss
   vec4 ambientLight;       // rgb: global ambient light
   float bailout;           // branches with a smaller weight are not traced
   float adaptiveThreshold; // adaptive AA: neighbour difference that triggers refinement
   float coneSpread;        // textures: the eye rays' cone spread angle, radians per unit distance
-  float unusedKnob1;
-  uvec2 imageSize; // width, height in pixels
+  float focusDistance;     // thin lens: distance of the plane in focus along cameraForward
+  uvec2 imageSize;         // width, height in pixels
   uint unused0;
   uint maxDepth; // bounces after the eye ray
   uint sphereCount;
