@@ -30,6 +30,9 @@ struct TimedRender {
 
 double median(std::vector<double> v);
 
+// The image scaled to `height` rows, its aspect kept (at least one pixel wide).
+void scaleToHeight(RenderSettings& settings, std::uint32_t height);
+
 // One counted render (statistics and image), `warmup` untimed renders, then `runs` timed ones.
 TimedRender timeRender(Renderer& renderer, const Scene& scene, const RenderSettings& settings,
                        const RenderOptions& options, int warmup, int runs);

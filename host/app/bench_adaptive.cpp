@@ -49,12 +49,6 @@ double interpolate(const std::vector<Point>& uniform, double target, double (*va
   return std::nan("");
 }
 
-void scaleToHeight(RenderSettings& s, std::uint32_t height) {
-  double aspect = static_cast<double>(s.width) / s.height;
-  s.height = height;
-  s.width = static_cast<std::uint32_t>(std::max(1.0, std::round(height * aspect)));
-}
-
 } // namespace
 
 int runBenchAdaptive(const BenchAdaptiveArgs& args) {

@@ -63,15 +63,11 @@ int runBenchTime(const BenchTimeArgs& args) {
   return 0;
 }
 
-namespace {
-
 void scaleToHeight(RenderSettings& s, std::uint32_t height) {
   double aspect = static_cast<double>(s.width) / s.height;
   s.height = height;
   s.width = static_cast<std::uint32_t>(std::max(1.0, std::round(height * aspect)));
 }
-
-} // namespace
 
 int runBenchSpecialize(const BenchSpecializeArgs& args) {
   std::vector<std::filesystem::path> scenes = args.scenes;
