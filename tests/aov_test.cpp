@@ -355,17 +355,7 @@ TEST(RenderAov, AlbedoOfACheckerIsTheColourOfTheCellHit) {
 
 // ---- The command line -------------------------------------------------------------------------
 
-struct Outcome {
-  int exitCode = -1;
-  std::string out, err;
-};
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
+using Outcome = CliRun;
 
 // The floor of RenderAov.DepthOfAPlaneIsTheDistanceAlongEachPixelRay, as a scene file.
 const char* const kFloorScene = R"({
@@ -385,16 +375,7 @@ protected:
   void TearDown() override { fs::remove_all(dir_); }
 
   // build/vkray with args (shell-quoted), on lavapipe.
-  Outcome vkray(const std::string& args) const {
-    std::string cmd = std::string("VKRAY_DEVICE=llvmpipe '") + VKRAY_BINARY + "' " + args + " >'" +
-                      (dir_ / "out").string() + "' 2>'" + (dir_ / "err").string() + "'";
-    int status = std::system(cmd.c_str());
-    Outcome r;
-    r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
-    r.out = slurp(dir_ / "out");
-    r.err = slurp(dir_ / "err");
-    return r;
-  }
+  Outcome vkray(const std::string& args) const { return runVkray(args, dir_); }
   std::string render(const fs::path& out, const std::string& flags) const {
     return "render '" + scene_.string() + "' -o '" + out.string() + "' -q " + flags;
   }

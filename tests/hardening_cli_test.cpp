@@ -23,6 +23,8 @@
 
 #include <gtest/gtest.h>
 
+#include "test_support.h"
+
 extern char** environ;
 
 namespace vkray::test {
@@ -32,13 +34,6 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 const fs::path kMalformedDir = VKRAY_SOURCE_DIR "/tests/data/malformed";
-
-std::string slurp(const fs::path& p) {
-  std::ifstream in(p, std::ios::binary);
-  std::ostringstream ss;
-  ss << in.rdbuf();
-  return ss.str();
-}
 
 std::string scene(const std::string& name) {
   return std::string(VKRAY_SOURCE_DIR "/scenes/") + name;

@@ -1,11 +1,14 @@
 // Shared GPU context, renderer and helpers for the tests (see test_support.h).
 #include "test_support.h"
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cstdlib>
+#include <fstream>
 #include <memory>
+#include <sstream>
 
 #include "scene/scene_loader.h"
 
@@ -88,6 +91,25 @@ std::filesystem::path freshScratchDir(const std::string& name) {
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
   return dir;
+}
+
+std::string slurp(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+CliRun runVkray(const std::string& args, const std::filesystem::path& dir) {
+  const std::filesystem::path out = dir / "vkray-stdout", err = dir / "vkray-stderr";
+  std::string cmd = std::string("VKRAY_DEVICE=llvmpipe '") + VKRAY_BINARY + "' " + args + " >'" + out.string() +
+                    "' 2>'" + err.string() + "'";
+  int status = std::system(cmd.c_str());
+  CliRun r;
+  r.exitCode = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  r.out = slurp(out);
+  r.err = slurp(err);
+  return r;
 }
 
 } // namespace vkray::test

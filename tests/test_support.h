@@ -48,4 +48,15 @@ std::string scenePath(const std::string& name);
 std::filesystem::path scratchDir(const std::string& name);
 std::filesystem::path freshScratchDir(const std::string& name);
 
+// A file's whole contents ("" when it cannot be read).
+std::string slurp(const std::filesystem::path& path);
+
+// build/vkray run with `args` (a shell-quoted string) on lavapipe; its standard output and error
+// pass through files in `dir`.
+struct CliRun {
+  int exitCode = -1;
+  std::string out, err;
+};
+CliRun runVkray(const std::string& args, const std::filesystem::path& dir);
+
 } // namespace vkray::test
