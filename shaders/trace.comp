@@ -10,6 +10,7 @@
 
 layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_size_z = 1) in;
 
+#define VKRAY_TREE_RECORDER 1 // the real recorder (lib/tree_record.glsl), behind RECORD_TREE
 #include "lib/sampling.glsl"
 #include "lib/shade.glsl"
 
@@ -80,8 +81,14 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   // Rays of this tree so far: a glass tree stops at kMaxTreeRays (counted as truncated below), on
   // every driver alike, rather than running 2^depth rays where no driver cuts the loop.
   uint treeRays = 0u;
+  // RECORD_TREE: the record of the current ray's parent, and of each waiting branch's.
+  uint parent = kTreeNoParent;
+  uint parentStack[STACK_SIZE];
   while (true) {
-    if (REFRACTION && treeRays == kMaxTreeRays) break;
+    if (REFRACTION && treeRays == kMaxTreeRays) {
+      if (RECORD_TREE) treeStopped();
+      break;
+    }
     treeRays++;
     uint depth = cur.depthKind & 0xFFFFu;
     countRay(cur.depthKind >> 16u, depth);
@@ -90,13 +97,24 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
     vec3 w = cur.weight;
     uint medium = REFRACTION ? mediaTop(cur.media) : kNoMedium;
     if (REFRACTION && medium != kNoMedium) w *= beerLambert(absorptionPerUnit(loadMaterial(medium)), hit.t);
+    uint record = kTreeNoParent;
+    if (RECORD_TREE) {
+      record = treeAppend(cur.depthKind >> 16u, parent, cur.origin, cur.dir, w);
+      gTreeCurrent = record;
+      gTreeWeight = w;
+    }
 
     haveNext = false;
     if (hit.kind == kNoHit) {
       radiance += w * frame.background.rgb;
+      if (RECORD_TREE) {
+        treeSetHit(record, hit, vec3(0.0), 0u);
+        treeAddContribution(record, w * frame.background.rgb);
+      }
     } else {
       Surface s = surfaceAt(r, hit);
       Material mat = loadMaterial(s.material);
+      if (RECORD_TREE) treeSetHit(record, hit, s.p, s.material);
       bool front = dot(s.ng, cur.dir) < 0.0;
       vec3 ngf = front ? s.ng : -s.ng;
       vec3 nsf = front ? s.ns : -s.ns;
@@ -129,12 +147,14 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
         vec3 wr = w * kr;
         bool doR = worthTracing(wr);
         if (COUNT_STATS && !doR && maxComponent(wr) > 0.0) gCount.bailoutSaved++;
+        if (RECORD_TREE) treeAddCuts(record, !doR && maxComponent(wr) > 0.0 ? kTreeCutReflectionBailout : 0u);
         vec3 wt = vec3(0.0);
         bool doT = false;
         if (REFRACTION) {
           wt = w * kt;
           doT = worthTracing(wt);
           if (COUNT_STATS && !doT && maxComponent(wt) > 0.0) gCount.bailoutSaved++;
+          if (RECORD_TREE) treeAddCuts(record, !doT && maxComponent(wt) > 0.0 ? kTreeCutRefractionBailout : 0u);
         }
         uint nextDepth = depth + 1u;
         PendingRay reflected;
@@ -148,9 +168,11 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           if (doR) {
             if (sp < STACK_SIZE) {
               if (TEXTURES) travelledStack[sp] = travelled + hit.t;
+              if (RECORD_TREE) parentStack[sp] = record;
               stack[sp++] = reflected;
-            } else if (COUNT_STATS) {
-              gCount.stackOverflow++;
+            } else {
+              if (COUNT_STATS) gCount.stackOverflow++;
+              if (RECORD_TREE) treeAddCuts(record, kTreeCutStack);
             }
           }
           cur = PendingRay(to, nextDepth | (kRayRefraction << 16u), tdir, wt, tmedia);
@@ -159,13 +181,19 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           cur = reflected;
           haveNext = true;
         }
+        if (RECORD_TREE) parent = record;
         if (TEXTURES) travelled += hit.t;
+      } else if (RECORD_TREE) {
+        // At the depth cap: the branches this surface would have had.
+        bool branches = (REFLECTION || REFRACTION) && (reflectance(mat) > 0.0 || transmittance(mat) > 0.0);
+        treeAddCuts(record, branches ? kTreeCutDepth : 0u);
       }
     }
     if (!haveNext) {
       // Without refraction nothing is ever pushed: the stack code compiles out.
       if (!REFRACTION || sp == 0) break;
       if (TEXTURES) travelled = travelledStack[sp - 1];
+      if (RECORD_TREE) parent = parentStack[sp - 1];
       cur = stack[--sp];
       haveNext = true;
     }
@@ -203,6 +231,7 @@ vec3 sampleSum(uvec2 pixel, uint pixelIndex, uint base, uint count, bool center)
   while (true) {
     vec2 offset = (CENTER_SAMPLE || center) ? vec2(0.5) : sobolOwenSample(base + k, hashPcg(pixelIndex));
     vec2 lensUv = THIN_LENS ? lensSample(base + k, hashPcg(pixelIndex)) : vec2(0.0);
+    if (RECORD_TREE) gTreeSample = base + k;
     sum += traceSample(pixel, offset, lensUv);
     ++k;
     if (k >= count) break;

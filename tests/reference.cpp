@@ -150,7 +150,7 @@ dvec3 ReferenceTracer::baseColor(const RefHit& h) const {
   return odd ? m.checker->color2 : m.color;
 }
 
-dvec3 ReferenceTracer::shadowTransmittance(const dvec3& p, const dvec3& light) const {
+dvec3 ReferenceTracer::shadowTransmittance(const dvec3& p, const dvec3& light, RefHit* blocker) const {
   dvec3 o = p;
   dvec3 transmit(1.0);
   double enteredAt = 0.0;
@@ -163,7 +163,10 @@ dvec3 ReferenceTracer::shadowTransmittance(const dvec3& p, const dvec3& light) c
     if (!h.hit()) return transmit;
     const Material& m = scene_.materials[h.material];
     bool opaque = m.transmission <= 0 || scene_.render.transmissiveShadows == TransmissiveShadows::Opaque;
-    if (opaque) return dvec3(0.0);
+    if (opaque) {
+      if (blocker) *blocker = h;
+      return dvec3(0.0);
+    }
     transmit *= m.transmission;
     double here = travelled + h.t;
     if (glm::dot(h.n, d) < 0) {
@@ -180,13 +183,20 @@ dvec3 ReferenceTracer::shadowTransmittance(const dvec3& p, const dvec3& light) c
 }
 
 dvec3 ReferenceTracer::localShade(const RefHit& h, const dvec3& d) const {
+  return shade(h, d, dvec3(1.0), nullptr, "");
+}
+
+dvec3 ReferenceTracer::shade(const RefHit& h, const dvec3& d, const dvec3& weight, std::vector<RefTreeRay>* tree,
+                             const std::string& path) const {
   const Material& m = scene_.materials[h.material];
   dvec3 base = baseColor(h);
   dvec3 color = m.ambient * base * scene_.ambientLight;
+  if (tree) tree->back().contribution += weight * color; // the ray being shaded was recorded last
   if (m.diffuse <= 0 && m.specular <= 0) return color;
   dvec3 n = glm::dot(h.n, d) < 0 ? h.n : -h.n;
   dvec3 v = -d;
-  for (const PointLight& light : scene_.lights) {
+  for (std::size_t li = 0; li < scene_.lights.size(); ++li) {
+    const PointLight& light = scene_.lights[li];
     dvec3 toL = light.position - h.p;
     double dist = glm::length(toL);
     if (dist <= 0) continue;
@@ -194,17 +204,28 @@ dvec3 ReferenceTracer::localShade(const RefHit& h, const dvec3& d) const {
     double ndotl = glm::dot(n, l);
     if (ndotl <= 0) continue;
     dvec3 visible(1.0);
-    if (light.shadows) visible = shadowTransmittance(h.p, light.position);
+    RefHit blocker;
+    if (light.shadows) visible = shadowTransmittance(h.p, light.position, &blocker);
     dvec3 r = 2.0 * ndotl * n - l;
     double rv = glm::dot(r, v);
     double spec = (m.specular > 0 && rv > 0) ? m.specular * std::pow(rv, m.shininess) : 0.0;
     color += visible * light.color * (m.diffuse * ndotl * base + spec);
+    if (tree) {
+      RefTreeRay s;
+      s.path = path + "/L" + std::to_string(li);
+      s.kind = 3;
+      s.outcome = !light.shadows ? 4 : blocker.hit() ? 3 : 2;
+      s.objectKind = blocker.kind;
+      s.objectIndex = blocker.index;
+      s.contribution = weight * visible * light.color * (m.diffuse * ndotl * base + spec);
+      tree->push_back(s);
+    }
   }
   return color;
 }
 
-dvec3 ReferenceTracer::trace(const dvec3& o, const dvec3& d, int depth, dvec3 weight,
-                             std::vector<std::uint32_t> media) const {
+dvec3 ReferenceTracer::trace(const dvec3& o, const dvec3& d, int depth, dvec3 weight, std::vector<std::uint32_t> media,
+                             std::vector<RefTreeRay>* tree, const std::string& path, int kind) const {
   RefHit h = closestHit(o, d, 1e-9 * (1.0 + glm::length(o)));
   dvec3 w = weight;
   if (!media.empty()) {
@@ -213,9 +234,19 @@ dvec3 ReferenceTracer::trace(const dvec3& o, const dvec3& d, int depth, dvec3 we
       if (sigma[c] > 0) w[c] *= std::exp(-sigma[c] * h.t);
     }
   }
+  if (tree) {
+    RefTreeRay r;
+    r.path = path;
+    r.kind = kind;
+    r.outcome = h.hit() ? 1 : 0;
+    r.objectKind = h.kind;
+    r.objectIndex = h.index;
+    r.contribution = h.hit() ? dvec3(0.0) : w * scene_.background;
+    tree->push_back(r);
+  }
   if (!h.hit()) return w * scene_.background;
   const Material& m = scene_.materials[h.material];
-  dvec3 color = w * localShade(h, d);
+  dvec3 color = w * shade(h, d, w, tree, path);
   if (depth >= scene_.render.maxDepth) return color;
   bool front = glm::dot(h.n, d) < 0;
   dvec3 n = front ? h.n : -h.n;
@@ -252,14 +283,18 @@ dvec3 ReferenceTracer::trace(const dvec3& o, const dvec3& d, int depth, dvec3 we
   };
   if (worth(w * kr)) {
     dvec3 rdir = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
-    color += trace(h.p, rdir, depth + 1, w * kr, media);
+    color += trace(h.p, rdir, depth + 1, w * kr, media, tree, path + "/R", 1);
   }
-  if (worth(w * kt)) color += trace(h.p, tdir, depth + 1, w * kt, tmedia);
+  if (worth(w * kt)) color += trace(h.p, tdir, depth + 1, w * kt, tmedia, tree, path + "/T", 2);
   return color;
 }
 
 dvec3 ReferenceTracer::radiance(const dvec3& o, const dvec3& d) const {
   return trace(o, d, 0, dvec3(1.0), {});
+}
+
+dvec3 ReferenceTracer::radiance(const dvec3& o, const dvec3& d, std::vector<RefTreeRay>& tree) const {
+  return trace(o, d, 0, dvec3(1.0), {}, &tree);
 }
 
 Image ReferenceTracer::render() const {

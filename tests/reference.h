@@ -6,6 +6,7 @@
 
 #include <limits>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
@@ -25,6 +26,18 @@ struct RefHit {
   bool hit() const { return kind >= 0; }
 };
 
+// One ray of a Whitted tree as the reference traces it (the inspector's test, ray_tree_test.cpp).
+// path names it from the eye: "eye", "eye/T" (refracted), "eye/T/R" (then reflected), "eye/L1"
+// (the shadow ray to light 1).
+struct RefTreeRay {
+  std::string path;
+  int kind = 0;        // 0 eye, 1 reflection, 2 refraction, 3 shadow (gpu::kTree*)
+  int outcome = 0;     // gpu::kTree* outcomes: miss, surface, light reached, blocked, unshadowed
+  int objectKind = -1; // the surface met or the blocker, as RefHit::kind; -1: none
+  std::size_t objectIndex = 0;
+  glm::dvec3 contribution{0.0}; // what this ray's shading adds to the radiance
+};
+
 class ReferenceTracer {
 public:
   explicit ReferenceTracer(const Scene& scene);
@@ -42,15 +55,23 @@ public:
 
   // Full Whitted radiance of a ray.
   glm::dvec3 radiance(const glm::dvec3& o, const glm::dvec3& d) const;
+  // The same, recording every ray of the tree.
+  glm::dvec3 radiance(const glm::dvec3& o, const glm::dvec3& d, std::vector<RefTreeRay>& tree) const;
 
   Image render() const; // pixel centres, 1 sample
 
   const Scene& scene() const { return scene_; }
 
 private:
+  // tree: where to record the rays (null: not recorded); path: this ray's name there.
   glm::dvec3 trace(const glm::dvec3& o, const glm::dvec3& d, int depth, glm::dvec3 weight,
-                   std::vector<std::uint32_t> media) const;
-  glm::dvec3 shadowTransmittance(const glm::dvec3& p, const glm::dvec3& light) const;
+                   std::vector<std::uint32_t> media, std::vector<RefTreeRay>* tree = nullptr,
+                   const std::string& path = "eye", int kind = 0) const;
+  // localShade, with each light's shadow ray recorded under `path` when tree is set.
+  glm::dvec3 shade(const RefHit& h, const glm::dvec3& d, const glm::dvec3& weight, std::vector<RefTreeRay>* tree,
+                   const std::string& path) const;
+  // blocker: the opaque surface that stopped the ray, if any.
+  glm::dvec3 shadowTransmittance(const glm::dvec3& p, const glm::dvec3& light, RefHit* blocker = nullptr) const;
   glm::dvec3 baseColor(const RefHit& h) const;
 
   Scene scene_;

@@ -22,11 +22,13 @@ struct RenderArgs {
   bool quiet = false;
   KernelFlags kernel;
   double bandMs = 100.0;
-  std::optional<int> frame;       // --frame N
-  std::string frames;             // --frames A-B
-  std::string tile;               // --tile I/N
-  bool exrHalf = false;           // --exr-half
-  std::optional<std::string> aov; // --aov LIST|all (render/aov.h)
+  std::optional<int> frame;            // --frame N
+  std::string frames;                  // --frames A-B
+  std::string tile;                    // --tile I/N
+  bool exrHalf = false;                // --exr-half
+  std::optional<std::string> aov;      // --aov LIST|all (render/aov.h)
+  std::optional<std::string> inspect;  // --inspect X,Y (render/ray_tree.h)
+  std::filesystem::path inspectOutput; // --inspect-out FILE (default: standard output)
 };
 
 struct MergeArgs {

@@ -65,10 +65,9 @@ int main(int argc, char** argv) {
   RenderArgs render;
   auto* renderCmd = app.add_subcommand("render", "render a scene to an image file (.png, .pfm or .exr)");
   renderCmd->add_option("scene", render.scene, "scene file (JSON) or model file (.obj, .gltf, .glb, .ply)")->required();
-  renderCmd
-      ->add_option("-o,--output", render.output,
-                   "output image: .png (sRGB 8-bit), .pfm (linear float) or .exr (linear float; OpenEXR)")
-      ->required();
+  renderCmd->add_option("-o,--output", render.output,
+                        "output image: .png (sRGB 8-bit), .pfm (linear float) or .exr (linear float; OpenEXR); "
+                        "required unless --inspect");
   renderCmd->add_flag("--exr-half", render.exrHalf, "write the .exr's channels as 16-bit half instead of 32-bit float");
   // Through a callback: CLI11 reads an empty value into a std::optional as "not given", and
   // `--aov ''` is an empty list, an error.
@@ -76,6 +75,12 @@ int main(int argc, char** argv) {
       "--aov", [&render](const std::string& list) { render.aov = list; },
       "also write AOV layers into the .exr: a comma-separated list of depth, normal, albedo, "
       "spp, error, rays, or all (32-bit float channels such as depth.Z, normal.X)");
+  renderCmd->add_option_function<std::string>(
+      "--inspect", [&render](const std::string& pixel) { render.inspect = pixel; },
+      "print, as JSON, every ray the kernel traces for pixel X,Y (its whole Whitted tree: eye, shadow, "
+      "reflection and refraction rays, what each met and what it added to the pixel)");
+  renderCmd->add_option("--inspect-out", render.inspectOutput,
+                        "write --inspect's JSON to this file instead of standard output");
   renderCmd->add_flag("--stats", render.stats, "print timings, ray counts and rays per second as 'name: value' lines");
   renderCmd->add_flag("--explain", render.explain, "say which effects the scene calls for and what is compiled out");
   renderCmd->add_flag("-q,--quiet", render.quiet, "no progress bar");

@@ -9,6 +9,7 @@
 #include "image/image_io.h"
 #include "image/tile_io.h"
 #include "render/aov.h"
+#include "render/ray_tree.h"
 #include "render/renderer.h"
 #include "scene/animation.h"
 #include "scene/features.h"
@@ -286,9 +287,25 @@ int runRender(const RenderArgs& args) {
   const std::vector<Aov> aovs = requestedAovs(args);
   const std::optional<TileRequest> tile = tileRequest(args, scene.render);
   checkExrHalf(args.exrHalf, args.output);
+  // --inspect X,Y: the pixel's ray tree; with -o the image is rendered and written too.
+  std::optional<glm::uvec2> inspected;
+  if (args.inspect) {
+    inspected = parsePixel(*args.inspect, scene.render.width, scene.render.height, "--inspect");
+    if (frames.last > frames.first) throw InputError("--inspect", "inspects one frame: give --frame N, not --frames");
+    if (tile) throw InputError("--inspect", "inspects a pixel of the whole image, not of a --tile");
+    if (!args.inspectOutput.empty() && args.inspectOutput.parent_path() != "" &&
+        !std::filesystem::is_directory(args.inspectOutput.parent_path())) {
+      throw InputError("--inspect-out " + args.inspectOutput.string(),
+                       "directory '" + args.inspectOutput.parent_path().string() + "' does not exist");
+    }
+  } else if (!args.inspectOutput.empty()) {
+    throw InputError("--inspect-out", "needs --inspect X,Y");
+  }
+  if (args.output.empty() && !inspected) throw InputError("-o", "an output image is required (.png, .pfm or .exr)");
+  const bool writesImage = !args.output.empty();
   // Every output checked, and a range given a pattern, before any time on the GPU.
   std::vector<std::filesystem::path> outputs;
-  for (int f = frames.first; f <= frames.last; ++f) {
+  for (int f = frames.first; writesImage && f <= frames.last; ++f) {
     bool pattern = false;
     outputs.push_back(frames.given ? framePath(args.output.string(), f, pattern) : args.output);
     if (frames.last > frames.first && !pattern) {
@@ -341,6 +358,21 @@ int runRender(const RenderArgs& args) {
     const Scene frameScene = scene.animation ? sceneAtFrame(scene, *scene.animation, f) : scene;
     // A static scene's features are the ones analysed above; an animated frame's are its own.
     renderer.setScene(frameScene, scene.animation ? analyzeScene(frameScene, frameScene.render) : *features);
+    if (inspected) {
+      RayTree tree = renderer.inspect(frameScene.camera, frameScene.render, options, *inspected);
+      if (context.validationEnabled() && context.validationMessageCount() > 0) {
+        throw DeviceError("the validation layer reported " + std::to_string(context.validationMessageCount()) +
+                          " message(s) while inspecting; no output written");
+      }
+      const std::string json = rayTreeJson(tree, frameScene) + "\n";
+      if (args.inspectOutput.empty()) {
+        std::fputs(json.c_str(), stdout);
+        std::fflush(stdout);
+      } else {
+        writeFileAtomic(args.inspectOutput, std::vector<std::uint8_t>(json.begin(), json.end()));
+      }
+      if (!writesImage) return 0;
+    }
     ProgressBar bar(!args.quiet);
     options.progress = [&](const RenderProgress& p) { bar.update(p); };
     RenderResult result = renderer.render(frameScene.camera, frameScene.render, options);

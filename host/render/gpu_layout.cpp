@@ -33,6 +33,9 @@ static_assert(sizeof(RayStats) == 48);
 static_assert(sizeof(SceneUbo) <= 65536, "the packed scene must fit the smallest maxUniformBufferRange");
 static_assert(sizeof(PushConstants) == 48 && offsetof(PushConstants, pass) == 16 &&
               offsetof(PushConstants, imageRow0) == 32);
+static_assert(sizeof(TreeRay) == 112 && offsetof(TreeRay, what) == 80 && offsetof(TreeRay, where) == 96,
+              "TreeRay: seven 16-byte members, as std430 lays them out");
+static_assert(sizeof(TreeRayHeader) == 16, "TreeRayBuffer: the records start 16 bytes in");
 static_assert(sizeof(PushConstants) <= 128, "Vulkan guarantees 128 bytes of push constants");
 // invocationPixel() (shaders/lib/camera.glsl) deals each row of 8 invocations a 4 x 2 pixel block.
 static_assert(kWorkgroupSizeX == 8 && kWorkgroupSizeY % 2 == 0, "invocationPixel assumes 8-wide, even-high groups");

@@ -80,6 +80,8 @@ void orderByLeaves(GpuScene& g) {
   std::vector<gpu::Sphere> spheres(g.spheres.size());
   std::vector<gpu::Triangle> triangles(g.triangles.size());
   std::vector<gpu::Polygon> polygons(g.polygons.size());
+  std::vector<std::uint32_t> sphereSource(g.sphereSource.size()), triangleSource(g.triangleSource.size()),
+      polygonSource(g.polygonSource.size());
   std::vector<glm::vec4> normals;
   normals.reserve(g.normals.size());
   std::vector<glm::vec4> texCoords;
@@ -90,6 +92,7 @@ void orderByLeaves(GpuScene& g) {
     std::uint32_t slot = next[kind]++;
     if (kind == gpu::kPrimSphere) {
       spheres[slot] = g.spheres[index];
+      sphereSource[slot] = g.sphereSource[index];
     } else if (kind == gpu::kPrimTriangle) {
       gpu::Triangle t = g.triangles[index];
       std::uint32_t uvBase = gpu::triangleUvBasePlusOne(t);
@@ -106,14 +109,19 @@ void orderByLeaves(GpuScene& g) {
         for (std::uint32_t k = 0; k < 3; ++k) normals.push_back(g.normals[normalBase + k]);
       }
       triangles[slot] = t;
+      triangleSource[slot] = g.triangleSource[index];
     } else {
       polygons[slot] = g.polygons[index];
+      polygonSource[slot] = g.polygonSource[index];
     }
     ref = kind << gpu::kPrimKindShift | slot;
   }
   g.spheres = std::move(spheres);
   g.triangles = std::move(triangles);
   g.polygons = std::move(polygons);
+  g.sphereSource = std::move(sphereSource);
+  g.triangleSource = std::move(triangleSource);
+  g.polygonSource = std::move(polygonSource);
   g.normals = std::move(normals);
   g.texCoords = std::move(texCoords);
 }
@@ -200,6 +208,7 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
         gpu::Light{glm::vec4(rel(l.position, origin), l.shadows ? 1.0f : 0.0f), glm::vec4(glm::vec3(l.color), 0.0f)});
   }
   for (const Sphere& s : scene.spheres) {
+    g.sphereSource.push_back(static_cast<std::uint32_t>(g.spheres.size()));
     // The centre as float plus its rounding error, so robust numerics see it to ~2^-48 (gpu_types.h).
     glm::dvec3 center = s.center - origin;
     glm::vec3 high(center);
@@ -217,12 +226,14 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
       const Plane& p = scene.planes[i];
       // n.(x_rel + origin) + D = 0  =>  n.x_rel + (D + n.origin) = 0
       double d = p.offset + glm::dot(p.normal, origin);
+      g.planeSource.push_back(static_cast<std::uint32_t>(i));
       g.planes.push_back(
           gpu::Plane{glm::vec4(glm::vec3(p.normal), static_cast<float>(d)), glm::uvec4(p.material, 0, 0, 0)});
       if (pass == 0) ++g.occluderPlanes;
     }
   }
   for (const Polygon& poly : scene.polygons) {
+    g.polygonSource.push_back(static_cast<std::uint32_t>(g.polygons.size()));
     auto first = static_cast<std::uint32_t>(g.polyVertices.size());
     for (const auto& v : poly.vertices) g.polyVertices.emplace_back(rel(v, origin), 0.0f);
     double d = -glm::dot(poly.normal, poly.vertices[0] - origin);
@@ -239,6 +250,7 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
     g.polygons.push_back(gp);
   }
   for (const Triangle& t : scene.triangles) {
+    g.triangleSource.push_back(static_cast<std::uint32_t>(g.triangles.size()));
     std::uint32_t normalBase = gpu::kNoNormals;
     if (t.normals) {
       normalBase = static_cast<std::uint32_t>(g.normals.size());

@@ -27,6 +27,9 @@ struct GpuScene {
   std::vector<gpu::Polygon> polygons;
   std::vector<glm::vec4> polyVertices;
   std::vector<glm::vec4> normals;
+  // Where each packed primitive came from: its index in the Scene's array of its kind (spheres,
+  // planes, polygons, triangles), kept through the reorderings (occluding planes first, BVH leaves).
+  std::vector<std::uint32_t> sphereSource, planeSource, polygonSource, triangleSource;
   // Textures (layouts in gpu_types.h): uv records of textured triangles, texture references and
   // level records, and every level's texels. Empty for scenes without textures.
   std::vector<glm::vec4> texCoords;

@@ -67,6 +67,7 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   // The camera's, not an effect's: on exactly when the scene has an aperture, even in the
   // all-features pipeline, whose images must equal the specialized ones.
   spec.set(gpu::kSpecThinLens, f.thinLens);
+  spec.set(gpu::kSpecRecordTree, o.recordTree && !refinePass && !listPass);
   // Bake small counts in so the driver unrolls the loops (see gpu_types.h); the all-features
   // pipeline keeps every count a runtime value.
   auto count = [&](std::size_t n) {

@@ -70,6 +70,9 @@ struct RenderOptions {
   // the viewer's cost map; the rows row culling would fill are traced instead, so that every pixel
   // is counted. A specialization: off, nothing of it is compiled.
   bool pixelRays = false;
+  // The sample pass records every ray it traces (Renderer::inspect, the ray-tree inspector). A
+  // specialization: off, the recorder compiles out.
+  bool recordTree = false;
   std::function<void(const RenderProgress&)> progress;
   const std::atomic<bool>* cancel = nullptr; // checked between bands
 };

@@ -102,6 +102,9 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
                                                   vk::BufferUsageFlagBits::eStorageBuffer);
   pixelRays_ = std::make_unique<vulkan::Buffer>(context, sizeof(std::uint32_t), vk::BufferUsageFlagBits::eStorageBuffer,
                                                 vulkan::MemoryUse::DeviceLocal, "rays per pixel (unused)");
+  rayTree_ = std::make_unique<vulkan::Buffer>(context, sizeof(gpu::TreeRayHeader) + sizeof(gpu::TreeRay),
+                                              vk::BufferUsageFlagBits::eStorageBuffer, vulkan::MemoryUse::DeviceLocal,
+                                              "ray tree (unused)");
 }
 
 Renderer::~Renderer() = default;
@@ -381,6 +384,55 @@ void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, c
   }
 }
 
+RayTree Renderer::inspect(const Camera& camera, const RenderSettings& settings, const RenderOptions& options,
+                          glm::uvec2 pixel, std::uint32_t capacity) {
+  if (pixel.x >= settings.width || pixel.y >= settings.height)
+    throw Error("Renderer::inspect: pixel outside the image");
+  RenderSettings s = settings;
+  s.noiseThreshold = 0.0;
+  s.timeLimit = 0.0;
+  s.antialiasing = Antialiasing::Stratified;
+  RenderOptions o = options;
+  o.kernel = Kernel::Shade;
+  o.recordTree = true;
+  o.progressive = false;
+  o.pixelStats = false;
+  o.pixelRays = false;
+  // Entry points and row culling serve whole tiles and rows; one pixel starts at the root. The
+  // hits are the same (they are exact), so the tree is the one the render traces.
+  o.entryPoints = false;
+  o.cullRows = false;
+  prepare(camera, s, o);
+
+  const vk::DeviceSize bytes = sizeof(gpu::TreeRayHeader) + vk::DeviceSize(capacity) * sizeof(gpu::TreeRay);
+  if (rayTree_->size() < bytes) {
+    rayTree_.reset();
+    rayTree_ = std::make_unique<vulkan::Buffer>(context_, bytes, vk::BufferUsageFlagBits::eStorageBuffer,
+                                                vulkan::MemoryUse::Readback, "ray tree");
+    updateDescriptors();
+  }
+  gpu::TreeRayHeader header{glm::uvec4(0u, capacity, 0u, 0u)};
+  rayTree_->write(&header, sizeof header);
+
+  gpu::PushConstants push{};
+  push.tileOrigin = pixel;
+  push.tileSize = glm::uvec2(1, 1);
+  push.imageRow0 = pixel.y;
+  push.pass = gpu::kPassSample;
+  push.sampleCount = static_cast<std::uint32_t>(s.spp);
+  push.flags = s.spp == 1 ? gpu::kFlagCenterSample : 0u;
+  submitBand(context_, timer_, "inspecting", pixel.y, 1,
+             [&](const auto& cmd) { recordDispatch(cmd, *kernels_.sample, push, nullptr); });
+  readStatsAndReset();
+
+  glm::vec4 sums;
+  image_->read(&sums, sizeof sums, vk::DeviceSize(pixel.x) * sizeof(glm::vec4));
+  rayTree_->read(&header, sizeof header);
+  std::vector<gpu::TreeRay> records(std::min(header.counts.x, capacity));
+  if (!records.empty()) rayTree_->read(records.data(), records.size() * sizeof(gpu::TreeRay), sizeof header);
+  return rayTreeFromRecords(header, records, gpuScene_, pixel, sums, static_cast<std::uint32_t>(settings.maxDepth));
+}
+
 void Renderer::prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options) {
   if (!sceneBuffers_.uploaded()) throw Error("Renderer::prepare: no scene set");
   current_ = features_;
@@ -483,6 +535,7 @@ void Renderer::updateDescriptors() {
                         : b == gpu::kBindingStats       ? stats_->handle()
                         : b == gpu::kBindingEntryPoints ? entryPoints_->handle()
                         : b == gpu::kBindingPixelRays   ? pixelRays_->handle()
+                        : b == gpu::kBindingRayTree     ? rayTree_->handle()
                                                         : sceneBuffers_.at(b).handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
     writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, &infos[b]);

@@ -15,6 +15,7 @@
 #include "render/gpu_scene.h"
 #include "render/kernel_variants.h"
 #include "render/ray_stats.h"
+#include "render/ray_tree.h"
 #include "render/render_options.h"
 #include "render/row_culling.h"
 #include "render/scene_buffers.h"
@@ -47,6 +48,14 @@ public:
 
   // Headless: the whole image, in bands, read back and averaged.
   RenderResult render(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
+
+  // The ray-tree inspector: traces pixel `pixel` alone with the recording kernel (kSpecRecordTree)
+  // and returns every ray its samples traced. Samples as a uniform render of settings.spp does
+  // (a noise threshold, time limit or adaptive antialiasing is not applied: their sample counts
+  // are decided per pixel by the whole image), so the tree's value is the pixel of that render.
+  // Up to `capacity` rays are kept (RayTree::notRecorded counts the rest).
+  RayTree inspect(const Camera& camera, const RenderSettings& settings, const RenderOptions& options, glm::uvec2 pixel,
+                  std::uint32_t capacity = 4096);
 
   // Progressive use (the viewer). prepare() sizes the image buffer to hold the whole image, builds
   // or reuses the pipelines and updates the frame parameters; recordSamples() records one dispatch
@@ -127,6 +136,7 @@ private:
   std::unique_ptr<vulkan::Buffer> prevImage_;   // refine pass input (or a 16-byte placeholder)
   std::unique_ptr<vulkan::Buffer> entryPoints_; // two uvec4 per 8 x 8 tile of the window
   std::unique_ptr<vulkan::Buffer> pixelRays_;   // a uint per pixel of the window (or a placeholder)
+  std::unique_ptr<vulkan::Buffer> rayTree_;     // the inspector's records (or a placeholder)
   std::uint32_t imageWidth_ = 0;
   std::uint32_t imageRows_ = 0;
   std::uint32_t imagePixelTexels_ = 1;

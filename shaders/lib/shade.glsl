@@ -6,6 +6,7 @@
 #include "optics.glsl"
 #include "scene.glsl"
 #include "texture.glsl"
+#include "tree_record.glsl"
 
 // This invocation's ray counters (the list in shared/gpu_types.h), summed per subgroup and added to
 // the statistics buffer at the end of the kernel (trace.comp, flushStats). `truncated` is counted
@@ -115,6 +116,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     // early return: on CPU drivers a return masks all the code after it.
     if (COUNT_RAYS) gCount.shadowRays += uint(dist > 0.0);
     Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true, false);
+    if (RECORD_TREE) treeNoteShadowHit(h, origin, dir, dist);
     return (dist <= 0.0 || h.kind == kNoHit) ? vec3(1.0) : vec3(0.0);
   }
   if (dist <= 0.0) return vec3(1.0);
@@ -131,6 +133,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     if (h.kind == kNoHit) return transmit;
     Surface s = surfaceAt(r, h);
     Material m = loadMaterial(s.material);
+    if (RECORD_TREE) treeNoteBlocker(h, s.p); // kept only if it stops the ray
     if (transmittance(m) <= 0.0) return vec3(0.0);
     transmit *= transmittance(m);
     float here = travelled + h.t;
@@ -155,6 +158,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
 vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
   vec3 base = baseColor(mat, s);
   vec3 color = ambientFactor(mat) * base * frame.ambientLight.rgb;
+  if (RECORD_TREE) treeAddContribution(gTreeCurrent, gTreeWeight * color);
   float kd = diffuseFactor(mat);
   float ks = specularFactor(mat);
   float shininess = phongExponent(mat);
@@ -172,12 +176,17 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
     bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0;
     if (lit) {
       vec3 visible = vec3(1.0);
+      if (RECORD_TREE) treeShadowStart();
       if (SHADOWS && castsShadows(light)) visible = shadowTransmittance(origin, lightPosition(light));
       vec3 r = reflect(-l, nsf);
       float rv = dot(r, v);
       // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
       float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
       if (maxComponent(visible) > 0.0) color += visible * lightColor(light) * (kd * ndotl * base + spec);
+      if (RECORD_TREE) {
+        vec3 share = maxComponent(visible) > 0.0 ? visible * lightColor(light) * (kd * ndotl * base + spec) : vec3(0.0);
+        treeRecordShadow(i, origin, lightPosition(light), SHADOWS && castsShadows(light), visible, gTreeWeight * share);
+      }
     }
   }
   return color;

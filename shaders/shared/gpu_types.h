@@ -55,7 +55,10 @@ VKRAY_CONST(uint, kBindingTexels, 19u);      // texels (RGBA32F): every level of
 // uint[]: rays traced per pixel (eye, shadow, reflection, refraction), summed over its samples like
 // Image[]: written by the sample pass only where kSpecPixelRays is on (the viewer's cost map).
 VKRAY_CONST(uint, kBindingPixelRays, 20u);
-VKRAY_CONST(uint, kBindingCount, 21u);
+// TreeRayBuffer: the rays one pixel's samples traced, recorded by the trace kernel where
+// kSpecRecordTree is on (`render --inspect`, the viewer's ray-tree overlay).
+VKRAY_CONST(uint, kBindingRayTree, 21u);
+VKRAY_CONST(uint, kBindingCount, 22u);
 
 // Capacities of the uniform copy, 64 KiB in all (the smallest maxUniformBufferRange of the devices
 // vkray targets). On CPU drivers a UBO read is one vector gather, an SSBO read a per-lane scalar
@@ -123,7 +126,11 @@ VKRAY_CONST(uint, kSpecPixelRays, 32u);
 // lens disk and passes through the plane in focus (depth of field). Off: the pinhole, and no lens
 // code at all, so a scene without an aperture renders bit for bit as before the lens existed.
 VKRAY_CONST(uint, kSpecThinLens, 33u);
-VKRAY_CONST(uint, kSpecCount, 34u);
+// The sample pass records every ray it traces into TreeRayBuffer (kBindingRayTree): the ray-tree
+// inspector, run on one pixel. Off in every other pipeline, where the recorder compiles out to
+// nothing (tests/ray_tree_test.cpp compares the folded SPIR-V with a build without it).
+VKRAY_CONST(uint, kSpecRecordTree, 34u);
+VKRAY_CONST(uint, kSpecCount, 35u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -462,6 +469,46 @@ struct PushConstants {
   uint prevRow0;    // image row held by PrevImage[0]
   uint prevRows;    // rows held by PrevImage[]
   uint pad0;
+};
+
+// ---- The ray-tree recorder (kSpecRecordTree, shaders/lib/tree_record.glsl) ----------------------
+// One TreeRay per ray the inspected pixel's samples trace, in the order the kernel traces them:
+// each eye ray, the shadow rays of the surface it meets, then its children depth first. Positions
+// are in the packed, camera-relative frame (GpuScene::origin); the host adds the origin back.
+VKRAY_CONST(uint, kTreeEye, 0u); // kinds: the trace kernel's kRay* and one for shadows
+VKRAY_CONST(uint, kTreeReflection, 1u);
+VKRAY_CONST(uint, kTreeRefraction, 2u);
+VKRAY_CONST(uint, kTreeShadow, 3u);
+// What a ray met: a surface, nothing (the background); for a shadow ray, its light (through
+// transmissive surfaces, attenuated, or freely), a blocker, or no shadow ray at all (the light casts
+// no shadows, or nothing in the scene can cast one) with the light's full share.
+VKRAY_CONST(uint, kTreeMiss, 0u);
+VKRAY_CONST(uint, kTreeSurface, 1u);
+VKRAY_CONST(uint, kTreeLightReached, 2u);
+VKRAY_CONST(uint, kTreeBlocked, 3u);
+VKRAY_CONST(uint, kTreeUnshadowed, 4u);
+// Why a surface's branches were not traced (bits of TreeRay.what.z).
+VKRAY_CONST(uint, kTreeCutDepth, 1u);             // at the depth cap with reflectance or transmission
+VKRAY_CONST(uint, kTreeCutReflectionBailout, 2u); // the reflected branch's weight was below the bailout
+VKRAY_CONST(uint, kTreeCutRefractionBailout, 4u); // the refracted branch's weight was below the bailout
+VKRAY_CONST(uint, kTreeCutStack, 8u);             // the reflected branch found the stack full
+VKRAY_CONST(uint, kTreeNoParent, 0xFFFFFFFFu);
+
+struct TreeRay {
+  vec4 origin;       // xyz: where the ray starts; w: distance to what it met (0 for a miss)
+  vec4 direction;    // xyz: unit direction
+  vec4 weight;       // rgb: what the ray's radiance is multiplied by on its way to the pixel
+  vec4 contribution; // rgb: radiance this ray's shading added to the sample (weight included)
+  vec4 point;        // xyz: the surface point, the light's position or the blocker's point
+  uvec4 what;        // x: kind; y: outcome; z: kTreeCut* bits; w: parent record (kTreeNoParent)
+  uvec4 where;       // x: primitive kind met (kPrim*; kNoHit); y: its index; z: light (shadow
+                     // rays) or material (surfaces); w: sample index
+};
+
+// The buffer: a header, then the records. header.x: records written; y: capacity; z: rays not
+// recorded for want of room; w: 1 when a tree stopped at kMaxTreeRays.
+struct TreeRayHeader {
+  uvec4 counts;
 };
 
 // ---- Probe kernel (shaders/probe.comp): the shaders/lib functions on arrays of test rays ---------
