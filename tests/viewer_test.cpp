@@ -371,6 +371,49 @@ TEST_F(Viewer, WithTheOverlayHiddenTheWindowIsTheRenderersImage) {
   }
 }
 
+// A click (here --inspect, which picks the pixel as a click does) shows the pixel's ray tree: the
+// same rays `render --inspect` prints, drawn over the image (the window differs from the Renderer's
+// image along them, beside the panel), and the image itself is untouched: after the restart the
+// inspection makes, N frames are still `render --spp N` bit for bit.
+TEST_F(Viewer, AnInspectedPixelShowsTheRenderersTreeAndLeavesTheImageAlone) {
+  const std::string size = "--width 480 --height 360";
+  fs::path shot = dir_ / "inspect-shot.pfm", window = dir_ / "inspect-window.png";
+  RunResult r =
+      vkray("view '" + scene("glass.json") + "' " + size + " --frames 3 --no-vsync --inspect 384,198 " +
+            "--screenshot '" + shot.string() + "' --screenshot-window '" + window.string() + "' --validate --stats");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  const std::string marker = "inspected pixel: 384,198 (";
+  const auto at = r.out.find(marker);
+  ASSERT_NE(at, std::string::npos) << r.out;
+  const int viewerRays = std::stoi(r.out.substr(at + marker.size()));
+
+  RunResult tree = vkray("render '" + scene("glass.json") + "' " + size + " --inspect 384,198 --validate");
+  ASSERT_EQ(tree.exitCode, 0) << tree.err;
+  int rendererRays = 0;
+  for (std::size_t p = tree.out.find("{\"index\":"); p != std::string::npos; p = tree.out.find("{\"index\":", p + 1))
+    ++rendererRays;
+  EXPECT_GT(rendererRays, 5) << "a glass pixel's tree";
+  EXPECT_EQ(viewerRays, rendererRays);
+
+  expectBitIdentical(readImage(shot), render(scene("glass.json"), size + " --spp 3", "inspect-render.pfm"));
+
+  // Right of the panel (340 wide at most), the lines are all that differs.
+  Image image = readImage(shot), shown = readImage(window);
+  ASSERT_EQ(image.width, shown.width);
+  std::size_t onLines = 0;
+  for (std::uint32_t y = 0; y < image.height; ++y) {
+    for (std::uint32_t x = 360; x < image.width; ++x) {
+      glm::vec3 a = glm::clamp(image.at(x, y), 0.0f, 1.0f), b = shown.at(x, y);
+      // The window is sRGB 8-bit: compare in display terms, well above its rounding.
+      glm::vec3 ad(linearToSrgb(a.r), linearToSrgb(a.g), linearToSrgb(a.b));
+      glm::vec3 bd(linearToSrgb(b.r), linearToSrgb(b.g), linearToSrgb(b.b));
+      onLines += glm::length(ad - bd) > 0.25f;
+    }
+  }
+  EXPECT_GT(onLines, 50u) << "the rays are drawn over the image";
+}
+
 // The viewer traces sample k of every pixel's sequence in frame k and adds it to the sums; the
 // headless render at spp N traces samples 0..N-1 in one loop, s0 + s1 + ... in the same order, with
 // the same specialized pipeline. So N still frames of 1 sample equal `render --spp N` bit for bit.

@@ -3,6 +3,7 @@
 
 #include <cstdio>
 
+#include "render/ray_tree.h"
 #include "scene/scene_loader.h"
 #include "util/error.h"
 #include "viewer/viewer.h"
@@ -41,6 +42,8 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
                   "what the window shows at start (M cycles): the image, the estimated error per pixel or the rays "
                   "traced per sample (cost), as heat maps; in a map, --screenshot holds its values")
       ->check(CLI::IsMember(enumNameList<DisplayMode>()));
+  cmd->add_option("--inspect", a.inspect,
+                  "show pixel X,Y's ray tree at start, as clicking on it does (in pixels of the rendered image)");
   addRenderFlags(*cmd, a.render);
   addKernelFlags(*cmd, a.kernel);
   addModelFlags(*cmd, a.model);
@@ -83,6 +86,8 @@ int runView(const ViewArgs& a) {
   o.printStats = a.stats;
   o.windowScreenshot = a.windowScreenshot;
   o.display = parseEnum<DisplayMode>(a.display).value_or(DisplayMode::Image);
+  // The image's size is known once the window is: the viewer checks the pixel lies inside it.
+  if (!a.inspect.empty()) o.inspect = parsePixel(a.inspect, UINT32_MAX, UINT32_MAX, "--inspect");
   if (!a.resizeTo.empty()) {
     unsigned w = 0, h = 0;
     char x = 0;

@@ -19,6 +19,7 @@ struct ViewArgs {
   RenderFlags render;
   ModelFlags model;
   bool noVsync = false;
+  std::string inspect; // --inspect X,Y
   bool noOverlay = false;
   bool noRayCounts = false;
   KernelFlags kernel;

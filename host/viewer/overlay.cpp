@@ -4,7 +4,9 @@
 
 #include <array>
 #include <cinttypes>
+#include <cmath>
 #include <cstdio>
+#include <functional>
 
 #include <imgui.h>
 #include <imgui_impl_glfw.h>
@@ -217,6 +219,124 @@ bool Overlay::wantsKeyboard() const {
   return visible && ImGui::GetIO().WantCaptureKeyboard;
 }
 
+namespace {
+
+// A ray's colour over the image and in the list: eye white, reflection cyan, refraction magenta,
+// shadow yellow when it reaches its light and dark red when it is blocked.
+ImU32 rayColour(const InspectedRay& r) {
+  switch (r.kind) {
+  case TreeRayKind::Eye:
+    return IM_COL32(255, 255, 255, 255);
+  case TreeRayKind::Reflection:
+    return IM_COL32(64, 224, 255, 255);
+  case TreeRayKind::Refraction:
+    return IM_COL32(255, 96, 255, 255);
+  case TreeRayKind::Shadow:
+    return r.outcome == TreeOutcome::Blocked ? IM_COL32(200, 40, 30, 255) : IM_COL32(255, 220, 60, 255);
+  }
+  return IM_COL32(255, 255, 255, 255);
+}
+
+// The segment a ray travelled, in world space: to what it met, or far along it into the background.
+std::pair<glm::dvec3, glm::dvec3> raySegment(const InspectedRay& r, double far) {
+  if (r.outcome == TreeOutcome::Background) return {r.origin, r.origin + far * r.direction};
+  return {r.origin, r.point};
+}
+
+// Draws each ray of the tree as a line over the image: world points projected with the camera onto
+// the image plane, cut where they pass behind the eye, scaled from render pixels to the window.
+void drawRayLines(const RayTree& tree, const CameraFrame& cam, vk::Extent2D renderSize) {
+  ImDrawList* draw = ImGui::GetBackgroundDrawList();
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const double sx = display.x, sy = display.y;
+  const glm::dvec3 right = cam.right * (cam.tanHalfFovY * cam.aspect), up = cam.up * cam.tanHalfFovY;
+  const double near = 1e-3;
+  auto depth = [&](const glm::dvec3& p) { return glm::dot(p - cam.position, cam.forward); };
+  auto project = [&](const glm::dvec3& p) {
+    glm::dvec3 d = p - cam.position;
+    double z = glm::dot(d, cam.forward);
+    double x = glm::dot(d, right) / (glm::dot(right, right) * z);
+    double y = glm::dot(d, up) / (glm::dot(up, up) * z);
+    return ImVec2(static_cast<float>((x + 1.0) * 0.5 * sx), static_cast<float>((1.0 - y) * 0.5 * sy));
+  };
+  double scale = 1.0; // the scene's size: rays into the background are drawn this far
+  for (const InspectedRay& r : tree.rays) scale = std::max(scale, r.distance);
+  for (const InspectedRay& r : tree.rays) {
+    auto [a, b] = raySegment(r, 10.0 * scale);
+    double za = depth(a), zb = depth(b);
+    if (za < near && zb < near) continue;
+    // Cut at the near plane: the part behind the eye has no image.
+    if (za < near) a = a + (b - a) * ((near - za) / (zb - za));
+    if (zb < near) b = a + (b - a) * ((near - depth(a)) / (zb - depth(a)));
+    const float width = r.kind == TreeRayKind::Shadow ? 1.0f : 2.0f;
+    draw->AddLine(project(a), project(b), rayColour(r), width);
+    if (r.outcome == TreeOutcome::Surface || r.outcome == TreeOutcome::Blocked)
+      draw->AddCircleFilled(project(b), 3.0f, rayColour(r));
+  }
+  // The inspected pixel itself.
+  const float px = (tree.pixel.x + 0.5f) * display.x / static_cast<float>(renderSize.width);
+  const float py = (tree.pixel.y + 0.5f) * display.y / static_cast<float>(renderSize.height);
+  draw->AddRect(ImVec2(px - 4, py - 4), ImVec2(px + 4, py + 4), IM_COL32(255, 255, 255, 255), 0.0f, 0, 1.5f);
+}
+
+std::string rgb(const glm::dvec3& c) {
+  char text[64];
+  std::snprintf(text, sizeof text, "%.4f %.4f %.4f", c.x, c.y, c.z);
+  return text;
+}
+
+// One line per ray: what it is, what it met and what it added; children nested under their parent.
+void listRays(const RayTree& tree) {
+  std::vector<std::vector<std::size_t>> children(tree.rays.size());
+  std::vector<std::size_t> roots;
+  for (std::size_t i = 0; i < tree.rays.size(); ++i) {
+    if (tree.rays[i].parent)
+      children[*tree.rays[i].parent].push_back(i);
+    else
+      roots.push_back(i);
+  }
+  std::function<void(std::size_t)> node = [&](std::size_t i) {
+    const InspectedRay& r = tree.rays[i];
+    std::string met;
+    switch (r.outcome) {
+    case TreeOutcome::Background:
+      met = "background";
+      break;
+    case TreeOutcome::Surface:
+    case TreeOutcome::Blocked: {
+      const char* kinds[] = {"sphere", "plane", "polygon", "triangle", "mesh"};
+      met = (r.outcome == TreeOutcome::Blocked ? "blocked by " : "") +
+            std::string(r.object ? kinds[static_cast<int>(r.object->kind)] : "?") + " " +
+            (r.object ? std::to_string(r.object->index) : "");
+      break;
+    }
+    case TreeOutcome::Light:
+    case TreeOutcome::Unshadowed:
+      met = "light " + std::to_string(r.light.value_or(0));
+      break;
+    }
+    char label[256];
+    std::snprintf(label, sizeof label, "#%zu %s -> %s%s##ray%zu", i, enumName(r.kind).data(), met.c_str(),
+                  r.cuts != 0 ? " (cut)" : "", i);
+    ImGui::PushStyleColor(ImGuiCol_Text, rayColour(r));
+    const ImGuiTreeNodeFlags flags =
+        ImGuiTreeNodeFlags_DefaultOpen | (children[i].empty() ? ImGuiTreeNodeFlags_Leaf : ImGuiTreeNodeFlags_None);
+    const bool open = ImGui::TreeNodeEx(label, flags);
+    ImGui::PopStyleColor();
+    if (ImGui::IsItemHovered()) {
+      ImGui::SetTooltip("weight       %s\ncontribution %s\ndistance     %.4g", rgb(r.weight).c_str(),
+                        rgb(r.contribution).c_str(), r.distance);
+    }
+    if (open) {
+      for (std::size_t c : children[i]) node(c);
+      ImGui::TreePop();
+    }
+  };
+  for (std::size_t root : roots) node(root);
+}
+
+} // namespace
+
 OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
   OverlayRequests req;
   if (!visible) {
@@ -239,6 +359,17 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
   }
   if (!m.status.empty()) ImGui::TextWrapped("%s", m.status.c_str());
 
+  if (m.rayTree) drawRayLines(*m.rayTree, m.camera, m.renderSize);
+  if (m.rayTree && ImGui::CollapsingHeader("Ray tree", ImGuiTreeNodeFlags_DefaultOpen)) {
+    const RayTree& t = *m.rayTree;
+    ImGui::Text("pixel %u,%u: %zu rays", t.pixel.x, t.pixel.y, t.rays.size());
+    ImGui::Text("value %s", rgb(t.value).c_str());
+    ImGui::SameLine();
+    if (ImGui::SmallButton("close")) req.closeRayTree = true;
+    ImGui::BeginChild("rays", ImVec2(0, std::min(24.0f * static_cast<float>(t.rays.size()) + 8.0f, 260.0f)), true);
+    listRays(t);
+    ImGui::EndChild();
+  }
   if (ImGui::CollapsingHeader("Convergence", ImGuiTreeNodeFlags_DefaultOpen)) {
     // The split-half estimate of each pixel's standard error (convergence.h), linear, the largest of
     // R, G and B; converged: the 3 x 3 neighbourhood's mean estimate is at most the threshold.
@@ -326,6 +457,7 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
                            "F / Tab: fly mode; W A S D, Q E: move, shift: fast\n"
                            "R: reset camera   C: save camera JSON\n"
                            "M: display image / error map / cost map\n"
+                           "click: the pixel's ray tree (drawn and listed)\n"
                            "P / F12: screenshot   H / F1: overlay   Esc: quit");
   }
   ImGui::End();

@@ -45,6 +45,10 @@ struct OverlayModel {
   double noiseThreshold = 0.0;   // convergence is judged at this threshold
   bool defaultThreshold = false; // neither the scene nor --noise-threshold set it
   ConvergenceFigures convergence;
+  // The inspected pixel's ray tree (a click), drawn over the image and listed; null: none. camera:
+  // the frame the rays are projected with, for an image of renderSize.
+  const RayTree* rayTree = nullptr;
+  CameraFrame camera{};
 };
 
 // What the user asked for through the overlay's buttons this frame.
@@ -53,6 +57,7 @@ struct OverlayRequests {
   bool saveCamera = false;
   bool screenshot = false;
   bool toggleFly = false;
+  bool closeRayTree = false;
 };
 
 class Overlay {

@@ -109,6 +109,7 @@ public:
     overlay_ = std::make_unique<Overlay>(context, window, swapchain_);
     overlay_->visible = options.overlay;
     presenter_.attach(swapchain_, overlay_->layerView());
+    inspectPixel_ = options.inspect;
   }
 
   int run();
@@ -120,6 +121,11 @@ private:
   bool handleInput(const InputFrame& input, double dtSeconds);
   void handleAction(ViewerAction action);
   void applyChanges(const ViewSettings& edited, bool sceneReloaded, bool cameraChanged);
+  // The settings of the frames' renders at the current size (applyChanges prepares with them).
+  RenderSettings frameSettings() const;
+  // Traces inspectPixel_'s ray tree (the Renderer's recording kernel, one pixel) into rayTree_;
+  // the frames' pipelines are prepared again and the image restarts.
+  void inspectPending();
   void quiesce();
   void collectStats();
   void publishStats(bool force);
@@ -202,6 +208,9 @@ private:
   RayStats raysPerFrame_;
   double raysPerSecond_ = 0.0;
   std::string status_;
+  std::optional<glm::uvec2> inspectPixel_; // a click (or --inspect) waiting to be inspected
+  std::optional<RayTree> rayTree_;         // the last inspected pixel's tree
+  bool restartRequested_ = false;          // prepare and restart the image at the next applyChanges
 };
 
 vk::Extent2D FrameLoop::renderSize() const {
@@ -237,6 +246,14 @@ bool FrameLoop::handleInput(const InputFrame& input, double dtSeconds) {
   CameraInput in;
   in.viewportHeight = window_.heightInCursorUnits(); // drags come in the cursor's units
   in.dtSeconds = dtSeconds;
+  if (!overlay_->wantsMouse() && input.click) {
+    // The clicked point of the window, in pixels of the rendered image (the presenter scales it).
+    const vk::Extent2D size = renderSize();
+    auto at = [](double f, std::uint32_t n) {
+      return static_cast<std::uint32_t>(std::clamp(f * n, 0.0, static_cast<double>(n - 1)));
+    };
+    inspectPixel_ = glm::uvec2(at(input.click->x, size.width), at(input.click->y, size.height));
+  }
   if (!overlay_->wantsMouse()) {
     bool pan = input.rightDown || input.middleDown || (input.leftDown && input.shift);
     bool orbit = input.leftDown && !pan;
@@ -303,7 +320,7 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   const bool pixelRays = settings_.display == DisplayMode::Cost;
   const bool pixelRaysChanged = pixelRays != pixelRays_;
   const bool restart = sceneReloaded || effectsChanged || knobsChanged || cameraChanged || sizeChanged || !prepared_ ||
-                       (pixelRaysChanged && pixelRays);
+                       restartRequested_ || (pixelRaysChanged && pixelRays);
   const bool displayChanged = settings_.display != shownDisplay_ || threshold() != convergence_.threshold();
   if (!restart && !pixelRaysChanged && !displayChanged) return;
 
@@ -314,16 +331,7 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
     return;
   }
   if (sceneReloaded || effectsChanged || !prepared_) renderer_.setScene(withEffects(scene_, settings_.effects));
-  RenderSettings r = settings_.render;
-  r.width = size.width;
-  r.height = size.height;
-  r.spp = settings_.samplesPerFrame;
-  // Progressive sampling already antialiases every pixel; adaptive refinement is a headless pass.
-  r.antialiasing = Antialiasing::Stratified;
-  // Frames sample every pixel alike; the noise threshold only judges convergence (ConvergenceMeter),
-  // and the time limit is a headless one.
-  r.noiseThreshold = 0.0;
-  r.timeLimit = 0.0;
+  const RenderSettings r = frameSettings();
   RenderOptions options = o_.render;
   options.progressive = true;
   options.countStats = settings_.countStats;
@@ -342,6 +350,42 @@ void FrameLoop::applyChanges(const ViewSettings& edited, bool sceneReloaded, boo
   // A scripted run's frames all belong to the final image: a new size or scene starts the count again.
   if (sizeChanged || sceneReloaded) tracedFrames_ = 0;
   prepared_ = true;
+  restartRequested_ = false;
+}
+
+RenderSettings FrameLoop::frameSettings() const {
+  const vk::Extent2D size = renderSize();
+  RenderSettings r = settings_.render;
+  r.width = size.width;
+  r.height = size.height;
+  r.spp = settings_.samplesPerFrame;
+  // Progressive sampling already antialiases every pixel; adaptive refinement is a headless pass.
+  r.antialiasing = Antialiasing::Stratified;
+  // Frames sample every pixel alike; the noise threshold only judges convergence (ConvergenceMeter),
+  // and the time limit is a headless one.
+  r.noiseThreshold = 0.0;
+  r.timeLimit = 0.0;
+  return r;
+}
+
+void FrameLoop::inspectPending() {
+  const glm::uvec2 pixel = *inspectPixel_;
+  inspectPixel_.reset();
+  RenderSettings r = frameSettings();
+  if (pixel.x >= r.width || pixel.y >= r.height) {
+    throw InputError("--inspect", "pixel " + std::to_string(pixel.x) + "," + std::to_string(pixel.y) +
+                                      " is outside the " + std::to_string(r.width) + " x " + std::to_string(r.height) +
+                                      " image");
+  }
+  // The pixel-centre ray's tree: what one sample of the pixel traces.
+  r.spp = 1;
+  quiesce();
+  rayTree_ = renderer_.inspect(camera_.camera(), r, o_.render, pixel);
+  status_ = "pixel " + std::to_string(pixel.x) + "," + std::to_string(pixel.y) + ": " +
+            std::to_string(rayTree_->rays.size()) + " rays";
+  // The recording kernel replaced the frames' pipelines and wrote into the image: start again.
+  restartRequested_ = true;
+  applyChanges(settings_, false, false);
 }
 
 void FrameLoop::applyDisplay() {
@@ -575,6 +619,10 @@ OverlayModel FrameLoop::overlayModel() const {
   m.noiseThreshold = threshold();
   m.defaultThreshold = !(settings_.render.noiseThreshold > 0.0);
   m.convergence = figures_;
+  if (rayTree_) {
+    m.rayTree = &*rayTree_;
+    m.camera = makeCameraFrame(camera_.camera(), m.renderSize.width, m.renderSize.height);
+  }
   return m;
 }
 
@@ -610,6 +658,10 @@ ViewerSummary FrameLoop::summarize() const {
   v.noiseThreshold = threshold();
   v.defaultThreshold = !(settings_.render.noiseThreshold > 0.0);
   v.convergence = figures_;
+  if (rayTree_) {
+    v.inspectedPixel = rayTree_->pixel;
+    v.inspectedRays = rayTree_->rays.size();
+  }
   return v;
 }
 
@@ -684,10 +736,12 @@ int FrameLoop::run() {
     if (req.resetCamera) handleAction(ViewerAction::ResetCamera);
     if (req.saveCamera) handleAction(ViewerAction::SaveCamera);
     if (req.screenshot) handleAction(ViewerAction::Screenshot);
+    if (req.closeRayTree) rayTree_.reset();
 
     const bool reloaded = followReload(edited);
     if (o_.spinDegrees != 0.0) camera_.orbit(o_.spinDegrees * 3.14159265358979323846 / 180.0, 0.0);
     applyChanges(edited, reloaded, !sameCamera(cameraBefore, camera_.camera()));
+    if (inspectPixel_) inspectPending();
     publishStats(false);
 
     auto beginStart = Clock::now();
@@ -778,6 +832,9 @@ void printViewerSummary(const ViewerSummary& v) {
     std::printf("mrays/s: %.2f\n", v.mraysPerSecond);
   }
   std::printf("samples: %u\n", v.samples);
+  if (v.inspectedPixel) {
+    std::printf("inspected pixel: %u,%u (%zu rays)\n", v.inspectedPixel->x, v.inspectedPixel->y, v.inspectedRays);
+  }
   std::printf("minimized: %.0f ms\n", v.minimizedMs);
   std::printf("display: %s\n", std::string(enumName(v.display)).c_str());
   std::printf("noise threshold: %g%s\n", v.noiseThreshold, v.defaultThreshold ? " (default)" : "");

@@ -44,6 +44,8 @@ struct ViewerSummary {
   double noiseThreshold = 0.0;              // convergence judged at this threshold
   bool defaultThreshold = false;            // kDefaultViewThreshold: neither scene nor flag set one
   ConvergenceFigures convergence;           // of the last frame
+  std::optional<glm::uvec2> inspectedPixel; // the pixel whose ray tree the overlay shows
+  std::size_t inspectedRays = 0;            // rays in that tree
   double fps() const { return frameMs > 0 ? 1000.0 / frameMs : 0.0; }
   double gpuMs() const { return traceMs + resolveMs + blitMs + overlayMs; }
 };
@@ -78,6 +80,8 @@ struct ViewerOptions {
   bool printStats = false;  // timing summary as `name: value` lines at exit
   // Scripted: the window's last frame as shown (overlay included), read back from the swapchain image.
   std::filesystem::path windowScreenshot;
+  // The pixel (of the render size) whose ray tree is shown at start, as a click on it would (tests, docs).
+  std::optional<glm::uvec2> inspect;
   ViewerSummary* summary = nullptr; // filled at exit when set
 };
 

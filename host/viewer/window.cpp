@@ -61,6 +61,7 @@ Window::Window(const GlfwSession& /*session*/, std::uint32_t width, std::uint32_
   glfwSetKeyCallback(window_.get(), onKey);
   glfwSetCursorPosCallback(window_.get(), onCursor);
   glfwSetScrollCallback(window_.get(), onScroll);
+  glfwSetMouseButtonCallback(window_.get(), onMouseButton);
   glfwSetFramebufferSizeCallback(window_.get(), onFramebufferSize);
 }
 
@@ -178,9 +179,29 @@ void Window::onKey(GLFWwindow* w, int key, int /*scancode*/, int action, int /*m
 void Window::onCursor(GLFWwindow* w, double x, double y) {
   auto* self = static_cast<Window*>(glfwGetWindowUserPointer(w));
   glm::dvec2 p(x, y);
-  if (self->haveCursor_) self->pending_.cursorDelta += p - self->lastCursor_;
+  if (self->haveCursor_) {
+    self->pending_.cursorDelta += p - self->lastCursor_;
+    self->dragged_ += glm::length(p - self->lastCursor_);
+  }
   self->lastCursor_ = p;
   self->haveCursor_ = true;
+}
+
+void Window::onMouseButton(GLFWwindow* w, int button, int action, int /*mods*/) {
+  if (button != GLFW_MOUSE_BUTTON_LEFT) return;
+  auto* self = static_cast<Window*>(glfwGetWindowUserPointer(w));
+  double x = 0.0, y = 0.0;
+  glfwGetCursorPos(w, &x, &y);
+  if (action == GLFW_PRESS) {
+    self->pressedAt_ = glm::dvec2(x, y);
+    self->dragged_ = 0.0;
+    return;
+  }
+  // A press and release within a few cursor units is a click; more is an orbit drag.
+  int width = 0, height = 0;
+  glfwGetWindowSize(w, &width, &height);
+  if (action == GLFW_RELEASE && self->dragged_ < 4.0 && width > 0 && height > 0)
+    self->pending_.click = glm::dvec2(x / width, y / height);
 }
 
 void Window::onScroll(GLFWwindow* w, double /*dx*/, double dy) {

@@ -3,6 +3,7 @@
 #pragma once
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -37,6 +38,9 @@ struct InputFrame {
   double scroll = 0.0;               // wheel steps since the last frame
   glm::dvec3 move{0.0};              // fly keys held: x = D - A, y = E - Q, z = W - S
   std::vector<ViewerAction> actions; // in the order pressed
+  // A left click that did not drag: where it was released, as a fraction of the window (0..1, y
+  // down). The viewer inspects that pixel's ray tree.
+  std::optional<glm::dvec2> click;
 };
 
 class Window {
@@ -73,6 +77,7 @@ private:
   static void onKey(GLFWwindow* w, int key, int scancode, int action, int mods);
   static void onCursor(GLFWwindow* w, double x, double y);
   static void onScroll(GLFWwindow* w, double dx, double dy);
+  static void onMouseButton(GLFWwindow* w, int button, int action, int mods);
   static void onFramebufferSize(GLFWwindow* w, int width, int height);
 
   struct Destroy {
@@ -82,6 +87,8 @@ private:
   InputFrame pending_;
   glm::dvec2 lastCursor_{0.0};
   bool haveCursor_ = false;
+  glm::dvec2 pressedAt_{0.0}; // the cursor when the left button went down
+  double dragged_ = 0.0;      // cursor travel since then
   bool resized_ = false;
 };
 
