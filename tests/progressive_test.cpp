@@ -58,13 +58,18 @@ TEST(Progressive, NeighbourhoodDecidesWhoStaysOpen) {
     img.add(x, 0, glm::vec4(x == 2 ? 0.0f : 1.0f, 0, 0, 2), glm::vec4(0));
     img.add(x, 0, glm::vec4(x == 2 ? 4.0f : 1.0f, 0, 0, 2), glm::vec4(0));
   }
-  EXPECT_DOUBLE_EQ(img.error(2, 0), 1.0);                               // A = 0, B = 2: |0 - 2| sqrt(4) / 4 = 1
-  EXPECT_DOUBLE_EQ(img.neighbourhoodError(1, 0), std::sqrt(1.0 / 3.0)); // RMS of 0, 0, 1
+  EXPECT_DOUBLE_EQ(img.error(2, 0), 1.0); // A = 0, B = 2: |0 - 2| sqrt(4) / 4 = 1
+  // Half the pixel's own square, half its neighbourhood's mean square: pixel 1, exact itself next to
+  // the noisy one, (0 + (0 + 0 + 1) / 3) / 2; pixel 2, (1 + (0 + 1 + 0) / 3) / 2.
+  EXPECT_DOUBLE_EQ(img.neighbourhoodError(1, 0), std::sqrt(1.0 / 6.0));
+  EXPECT_DOUBLE_EQ(img.neighbourhoodError(2, 0), std::sqrt(2.0 / 3.0));
+  EXPECT_DOUBLE_EQ(img.neighbourhoodError(0, 0), 0.0);
   std::vector<std::uint32_t> all{0, 1, 2, 3, 4};
-  // At 0.6 pixel 2's neighbours (0.577) close, pixel 2 (0.577 too: it sits between two exact ones)
-  // as well; at 0.5 the three middle pixels stay open.
-  EXPECT_TRUE(img.stillOpen(all, 0.6).empty());
-  EXPECT_EQ(img.stillOpen(all, 0.5), (std::vector<std::uint32_t>{1, 2, 3}));
+  // At 0.9 every pixel closes; at 0.5 the noisy pixel stays open and no longer holds its settled
+  // neighbours (0.41) with it; at 0.4 they stay open too.
+  EXPECT_TRUE(img.stillOpen(all, 0.9).empty());
+  EXPECT_EQ(img.stillOpen(all, 0.5), (std::vector<std::uint32_t>{2}));
+  EXPECT_EQ(img.stillOpen(all, 0.4), (std::vector<std::uint32_t>{1, 2, 3}));
   // Only pixels open before can stay open.
   EXPECT_EQ(img.stillOpen({2}, 0.5), (std::vector<std::uint32_t>{2}));
 }

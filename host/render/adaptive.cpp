@@ -77,7 +77,9 @@ double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) co
       ++count;
     }
   }
-  return count > 0 ? std::sqrt(sum / count) : std::numeric_limits<double>::infinity();
+  if (count == 0) return std::numeric_limits<double>::infinity();
+  const double own = errors_[static_cast<std::size_t>(y) * width_ + x];
+  return std::sqrt(0.5 * (own * own + sum / count));
 }
 
 std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::uint32_t>& open, double threshold) const {
