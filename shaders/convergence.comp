@@ -48,8 +48,10 @@ void main() {
     if (inside) imageStore(errors, i, vec4(estimate(i)));
     return;
   }
-  // Step 1: the pixel's bin, and whether its neighbourhood has converged (as adaptive.cpp's
-  // neighbourhoodError: the mean over the 3 x 3 pixels inside the image; one without an estimate never has).
+  // Step 1: the pixel's bin, and whether it has converged as adaptive.cpp's neighbourhoodError
+  // judges it: half its own squared estimate, half the mean square over the 3 x 3 pixels inside the
+  // image. Squares of estimates capped at 1e18, so that no estimate squares to +inf: one without
+  // an estimate (kNoEstimate) still never converges.
   bool converged = false;
   bool unestimated = false;
   if (inside) {
@@ -62,11 +64,13 @@ void main() {
         ivec2 q = pixel + ivec2(dx, dy);
         bool within = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(size)));
         ivec2 c = clamp(q, ivec2(0), ivec2(size) - 1);
-        sum += within ? imageLoad(errors, c.y * int(size.x) + c.x).r : 0.0;
+        float neighbour = min(imageLoad(errors, c.y * int(size.x) + c.x).r, 1e18);
+        sum += within ? neighbour * neighbour : 0.0;
         count += within ? 1.0 : 0.0;
       }
     }
-    converged = sum / count <= THRESHOLD;
+    float own = min(e, 1e18);
+    converged = 0.5 * (own * own + sum / count) <= THRESHOLD * THRESHOLD;
     if (!unestimated) {
       float bin = (log2(max(e, 1e-30)) - float(kHistogramLowLog2)) * float(kHistogramBinsPerOctave);
       uint b = uint(clamp(bin, 0.0, float(kHistogramBins - 1u)));

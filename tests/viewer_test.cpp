@@ -522,6 +522,41 @@ TEST_F(Viewer, AFlatSceneHasNoErrorAndHasConvergedEverywhere) {
   EXPECT_LT(worst, 1e-5f) << "every pixel's estimate (and none missing, which reads +inf)";
 }
 
+// The converged share is the headless stopping rule applied to the estimates the error map shows:
+// a pixel has converged when half its own squared estimate plus half the mean square over its 3 x 3
+// neighbourhood (inside the image) is at most the threshold squared (host/render/adaptive.h).
+TEST_F(Viewer, TheConvergedShareIsTheHeadlessRuleOnTheErrorMap) {
+  fs::path shot = dir_ / "estimates.pfm";
+  RunResult r = vkray("view '" + scene("showcase.json") + "' --width 64 --height 48 --frames 8 --display error " +
+                      "--no-ray-counts --stats --validate --noise-threshold 0.01 --screenshot '" + shot.string() + "'");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  Image e = readImage(shot);
+  ASSERT_EQ(e.width, 64u);
+  std::size_t converged = 0;
+  for (std::uint32_t y = 0; y < e.height; ++y) {
+    for (std::uint32_t x = 0; x < e.width; ++x) {
+      double sum = 0.0;
+      int count = 0;
+      for (int dy = -1; dy <= 1; ++dy) {
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int u = int(x) + dx, v = int(y) + dy;
+          if (u < 0 || v < 0 || u >= int(e.width) || v >= int(e.height)) continue;
+          const double q = e.at(u, v).x;
+          sum += q * q;
+          ++count;
+        }
+      }
+      const double own = e.at(x, y).x;
+      converged += 0.5 * (own * own + sum / count) <= 0.01 * 0.01;
+    }
+  }
+  const double share = 100.0 * double(converged) / double(e.pixels.size());
+  EXPECT_GT(share, 5.0);
+  EXPECT_LT(share, 99.0) << "some pixels of the showcase are still noisy at 8 samples";
+  // Float against double at the threshold may flip a pixel or two (each is 0.033 %).
+  EXPECT_NEAR(statValue(r.out, "converged"), share, 0.07) << r.out;
+}
+
 // The cost map counts the rays each pixel traced (eye, shadow, reflection, refraction) per sample.
 // The left half of the view is a mirror, whose pixels also trace a reflection ray and the shadow ray
 // of what it shows (a lit wall behind the camera); the right half is a lit diffuse wall (an eye ray
