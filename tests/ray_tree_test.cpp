@@ -341,6 +341,8 @@ TEST_F(CliInspect, BadPixelsAndCombinationsAreRefusedInOneLine) {
       {"--inspect 1.5,2", "vkray: error: --inspect: expected a pixel as X,Y (two integers >= 0), got '1.5,2'\n"},
       {"--inspect 64,0", "vkray: error: --inspect: pixel 64,0 is outside the 64 x 48 image\n"},
       {"--inspect-out x.json", "vkray: error: --inspect-out: needs --inspect X,Y\n"},
+      {"--inspect 1,1 --stats", "vkray: error: --inspect: prints its JSON on standard output, where --stats prints "
+                                "too: give --inspect-out FILE\n"},
       {"", "vkray: error: -o: an output image is required (.png, .pfm or .exr)\n"},
   };
   for (const Case& c : cases) {

@@ -293,6 +293,10 @@ int runRender(const RenderArgs& args) {
     inspected = parsePixel(*args.inspect, scene.render.width, scene.render.height, "--inspect");
     if (frames.last > frames.first) throw InputError("--inspect", "inspects one frame: give --frame N, not --frames");
     if (tile) throw InputError("--inspect", "inspects a pixel of the whole image, not of a --tile");
+    if (args.stats && args.inspectOutput.empty()) {
+      throw InputError("--inspect", "prints its JSON on standard output, where --stats prints too: give "
+                                    "--inspect-out FILE");
+    }
     if (!args.inspectOutput.empty() && args.inspectOutput.parent_path() != "" &&
         !std::filesystem::is_directory(args.inspectOutput.parent_path())) {
       throw InputError("--inspect-out " + args.inspectOutput.string(),
