@@ -81,4 +81,20 @@ struct BenchAdaptiveArgs {
 // A noise threshold against uniform sampling at equal 95th-percentile error (docs/accuracy.md).
 int runBenchAdaptive(const BenchAdaptiveArgs& args);
 
+struct BenchForwardArgs {
+  std::vector<std::filesystem::path> scenes; // default: seed, glass
+  std::filesystem::path csv;                 // every point, for tools/forward-plot (empty: none)
+  DeviceFlags device;
+  int runs = 3;
+  std::uint32_t height = 120;
+  double aperture = 0.05; // lens radius as a fraction of the focus distance
+  int referenceSpp = 1024;
+  int maxSpp = 64;                     // backward points 1, 2, 4, ... spp
+  std::uint64_t minPhotons = 1u << 16; // forward points, x4 each
+  std::uint64_t maxPhotons = 1u << 24;
+};
+
+// Forward against backward tracing: error against time, and the struck fraction (docs/forward.md).
+int runBenchForward(const BenchForwardArgs& args);
+
 } // namespace vkray

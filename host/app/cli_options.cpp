@@ -91,6 +91,9 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(positiveReal(1e6));
   app.add_option("--time-limit", f.timeLimit, "progressive: passes stop within this many seconds of GPU time")
       ->check(positiveReal(kMaxTimeLimitSeconds));
+  app.add_option("--method", f.method, "backward (rays from the eye, default) or forward (photons from the lights)")
+      ->check(CLI::IsMember(enumNameList<Method>()));
+  app.add_option("--photons", f.photons, "forward: photons each light emits")->check(CLI::Range(1ll, kMaxPhotons));
   app.add_option("--min-spp", f.minSpp, "progressive: samples every pixel gets first (default 16)")
       ->check(CLI::Range(1ll, kMaxSpp));
   app.add_option("--max-spp", f.maxSpp, "progressive: the most samples a pixel gets (default 1024)")
@@ -120,6 +123,8 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
   if (f.noiseThreshold) s.noiseThreshold = *f.noiseThreshold;
   if (f.timeLimit) s.timeLimit = *f.timeLimit;
   if (f.minSpp) s.minSpp = *f.minSpp;
+  if (f.method) s.method = *parseEnum<Method>(*f.method);
+  if (f.photons) s.photons = static_cast<std::uint64_t>(*f.photons);
   if (f.maxSpp) s.maxSpp = *f.maxSpp;
   if (f.adaptiveThreshold) s.adaptiveThreshold = *f.adaptiveThreshold;
   if (f.antialiasing) s.antialiasing = *parseEnum<Antialiasing>(*f.antialiasing);

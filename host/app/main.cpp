@@ -12,6 +12,7 @@
 #include "app/commands.h"
 #include "app/view_command.h"
 #include "scene/json_reader.h"
+#include "scene/scene_limits.h"
 #include "util/error.h"
 
 namespace {
@@ -181,6 +182,26 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(1, 4096));
   addDeviceFlags(*benchAdaptiveCmd, benchAdaptive.device);
 
+  BenchForwardArgs benchForward;
+  auto* benchForwardCmd = benchCmd->add_subcommand(
+      "forward", "forward against backward tracing: error against time, and the photons the lens catches");
+  benchForwardCmd->add_option("scenes", benchForward.scenes, "scene files (default: seed, glass)");
+  benchForwardCmd->add_option("--runs", benchForward.runs, "timed runs per point, interleaved")
+      ->check(CLI::Range(1, 1000));
+  benchForwardCmd->add_option("--height", benchForward.height, "image height (aspect kept)")
+      ->check(CLI::Range(8, 4096));
+  benchForwardCmd->add_option("--aperture", benchForward.aperture, "lens radius, as a fraction of the focus distance")
+      ->check(positiveReal(1.0));
+  benchForwardCmd->add_option("--reference-spp", benchForward.referenceSpp, "samples per pixel of the reference")
+      ->check(CLI::Range(1, 4096));
+  benchForwardCmd->add_option("--max-spp", benchForward.maxSpp, "largest backward point")->check(CLI::Range(1, 4096));
+  benchForwardCmd->add_option("--min-photons", benchForward.minPhotons, "smallest forward point (photons per light)")
+      ->check(CLI::Range(1ll, kMaxPhotons));
+  benchForwardCmd->add_option("--max-photons", benchForward.maxPhotons, "largest forward point (x4 steps)")
+      ->check(CLI::Range(1ll, kMaxPhotons));
+  benchForwardCmd->add_option("--csv", benchForward.csv, "write every point to this CSV (tools/forward-plot)");
+  addDeviceFlags(*benchForwardCmd, benchForward.device);
+
   DeviceFlags infoFlags;
   auto* infoCmd = app.add_subcommand("info", "list Vulkan devices and the features vkray uses");
   infoCmd->add_option("--device", infoFlags.device, "also create a context on this device")->envname("VKRAY_DEVICE");
@@ -203,6 +224,7 @@ int main(int argc, char** argv) {
     if (*benchTimeCmd) return runBenchTime(benchTime);
     if (*benchAccCmd) return runBenchAccuracy(benchAcc);
     if (*benchAdaptiveCmd) return runBenchAdaptive(benchAdaptive);
+    if (*benchForwardCmd) return runBenchForward(benchForward);
     if (*benchMeshesCmd) return runBenchMeshes(benchMeshes);
     if (*benchSpecCmd) return runBenchSpecialize(benchSpec);
     if (*benchViewCmd) return runBenchView(benchView);

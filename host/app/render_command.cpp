@@ -198,7 +198,19 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   std::printf("device: %s (%s)\n", info.name.c_str(), info.driver.c_str());
   std::printf("image: %ux%u\n", scene.render.width, scene.render.height);
   const ProgressiveSummary& prog = result.progressive;
-  if (prog.passes > 0) {
+  const ForwardSummary& fwd = result.forward;
+  if (scene.render.method == Method::Forward) {
+    // Forward tracing: how many photons the lights emitted and how few of them the lens caught.
+    std::printf("method: forward\n");
+    if (scene.render.timeLimit > 0.0) std::printf("time limit: %g s\n", scene.render.timeLimit);
+    std::printf("lights: %u\n", fwd.lights);
+    std::printf("photons per light: %llu\n", static_cast<unsigned long long>(fwd.photonsPerLight));
+    std::printf("photons emitted: %llu\n", static_cast<unsigned long long>(fwd.emitted));
+    std::printf("photons struck: %llu\n", static_cast<unsigned long long>(fwd.struck));
+    std::printf("struck fraction: %.3g\n", fwd.struckFraction());
+    std::printf("photon batches: %d\n", fwd.batches);
+    std::printf("aperture: %g\n", scene.camera.aperture);
+  } else if (prog.passes > 0) {
     // Progressive: what the noise threshold or time limit reached (host/render/adaptive.h).
     if (scene.render.noiseThreshold > 0.0) std::printf("noise threshold: %g\n", scene.render.noiseThreshold);
     if (scene.render.timeLimit > 0.0) std::printf("time limit: %g s\n", scene.render.timeLimit);
@@ -265,12 +277,18 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   printStat("readback", result.timings.readbackMs);
   printStat("write", writeMs);
   printStat("total", msSince(t0));
-  for (const auto& [name, value] : s.named()) {
-    std::printf("%.*s: %llu\n", static_cast<int>(name.size()), name.data(), static_cast<unsigned long long>(value));
+  if (scene.render.method == Method::Forward) {
+    if (fwd.nonFinite > 0)
+      std::printf("non-finite contributions: %llu\n", static_cast<unsigned long long>(fwd.nonFinite));
+  } else {
+    for (const auto& [name, value] : s.named()) {
+      std::printf("%.*s: %llu\n", static_cast<int>(name.size()), name.data(), static_cast<unsigned long long>(value));
+    }
   }
-  std::printf("rays: %llu\n", static_cast<unsigned long long>(s.total()));
+  const std::uint64_t rays = scene.render.method == Method::Forward ? fwd.rays : s.total();
+  std::printf("rays: %llu\n", static_cast<unsigned long long>(rays));
   double seconds = result.timings.traceMs * 1e-3;
-  double rps = seconds > 0 ? static_cast<double>(s.total()) / seconds : 0.0;
+  double rps = seconds > 0 ? static_cast<double>(rays) / seconds : 0.0;
   std::printf("rays per second: %.0f\n", rps);
   std::printf("mrays/s: %.2f\n", rps * 1e-6);
 }
@@ -292,6 +310,9 @@ int runRender(const RenderArgs& args) {
   if (args.inspect) {
     inspected = parsePixel(*args.inspect, scene.render.width, scene.render.height, "--inspect");
     if (frames.last > frames.first) throw InputError("--inspect", "inspects one frame: give --frame N, not --frames");
+    if (scene.render.method == Method::Forward) {
+      throw InputError("--inspect", "shows a pixel's backward ray tree; this render is --method forward");
+    }
     if (tile) throw InputError("--inspect", "inspects a pixel of the whole image, not of a --tile");
     if (args.stats && args.inspectOutput.empty()) {
       throw InputError("--inspect", "prints its JSON on standard output, where --stats prints too: give "

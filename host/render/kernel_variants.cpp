@@ -4,6 +4,7 @@
 #include "aov_spv.h"     // kAovSpv: shaders/aov.comp, the first-hit AOVs
 #include "entry_spv.h"   // kEntrySpv: shaders/entry.comp, each tile's BVH entry points
 #include "fill_spv.h"    // kFillSpv: shaders/fill.comp, row culling's background fill
+#include "forward_spv.h" // kForwardSpv: shaders/forward.comp, photons from the lights
 #include "hits_spv.h"    // kHitsSpv: shaders/hits.comp, the ray queries alone
 #include "trace64_spv.h" // kTrace64Spv: the trace kernel intersecting in double (-DVKRAY_FLOAT64)
 #include "trace_spv.h"   // kTraceSpv: shaders/trace.comp
@@ -98,6 +99,10 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
         o.kernel, precision, specializationFor(f, s, options, shape, memory, centerSample, refinePass, listPass),
         o.foldSpirv ? vulkan::SpecializationFolding::FoldSpirv : vulkan::SpecializationFolding::DriverOnly};
   };
+  if (o.kernel == Kernel::Forward) {
+    plan.sample = key(o, false, false);
+    return plan;
+  }
   if (progressiveRender(s, o) && o.kernel == Kernel::Shade) {
     // Progressive passes over lists of open pixels (host/render/adaptive.h): one pipeline, with
     // entry points found once for the whole image, and no row culling (a row that sees nothing
@@ -202,11 +207,18 @@ std::unique_ptr<vulkan::ComputePipeline>& KernelLibrary::traceSlot(const Pipelin
     throw InputError("render.precision", "float64 needs shaderFloat64, which " + context_.info().name + " lacks");
   }
   if (f64 && key.kernel == Kernel::Hits) throw InputError("render.precision", "the ray-query kernel is float32 only");
-  std::span<const std::uint32_t> code = key.kernel == Kernel::Hits  ? std::span<const std::uint32_t>(kHitsSpv)
-                                        : key.kernel == Kernel::Aov ? std::span<const std::uint32_t>(kAovSpv)
-                                        : f64                       ? std::span<const std::uint32_t>(kTrace64Spv)
-                                                                    : std::span<const std::uint32_t>(kTraceSpv);
-  const char* kernel = key.kernel == Kernel::Hits ? "hits" : key.kernel == Kernel::Aov ? "aov" : "trace";
+  if (f64 && key.kernel == Kernel::Forward) {
+    throw InputError("render.precision", "forward tracing is float32 only");
+  }
+  std::span<const std::uint32_t> code = key.kernel == Kernel::Hits      ? std::span<const std::uint32_t>(kHitsSpv)
+                                        : key.kernel == Kernel::Aov     ? std::span<const std::uint32_t>(kAovSpv)
+                                        : key.kernel == Kernel::Forward ? std::span<const std::uint32_t>(kForwardSpv)
+                                        : f64                           ? std::span<const std::uint32_t>(kTrace64Spv)
+                                                                        : std::span<const std::uint32_t>(kTraceSpv);
+  const char* kernel = key.kernel == Kernel::Hits      ? "hits"
+                       : key.kernel == Kernel::Aov     ? "aov"
+                       : key.kernel == Kernel::Forward ? "forward"
+                                                       : "trace";
   std::string name = std::string(kernel) + role + (f64 ? " (float64)" : "");
   jobs.push_back(Job{&slot, code, key.spec, name, key.folding});
   return slot;

@@ -37,7 +37,8 @@ template <> struct EnumNames<SceneMemory> {
 // hit of each pixel-centre eye ray and, with shadows, one any-hit shadow ray; no shading), which
 // `vkray bench meshes` sets against Embree, or the first-hit AOVs of the pixel-centre eye rays
 // (shaders/aov.comp: depth, normal, albedo; `render --aov`).
-enum class Kernel { Shade, Hits, Aov };
+// Kernel::Forward: photons from the lights (shaders/forward.comp, `render --method forward`).
+enum class Kernel { Shade, Hits, Aov, Forward };
 
 struct RenderOptions {
   Kernel kernel = Kernel::Shade;
@@ -130,10 +131,25 @@ struct FirstHit {
 };
 static_assert(sizeof(FirstHit) == 2 * sizeof(glm::vec4), "two texels per pixel (shaders/aov.comp)");
 
+// What a forward render (settings.method forward) traced: photons each light emitted, the branches
+// of them that passed through the lens onto the image (a photon that passes glass may scatter
+// towards the camera at more than one surface), the rays traced, and the batches.
+struct ForwardSummary {
+  std::uint64_t photonsPerLight = 0; // 0: not a forward render
+  std::uint32_t lights = 0;
+  std::uint64_t emitted = 0;   // photonsPerLight * lights
+  std::uint64_t struck = 0;    // photons (branches) that reached a pixel through the lens
+  std::uint64_t rays = 0;      // every ray the photons traced
+  std::uint64_t nonFinite = 0; // contributions dropped as NaN/Inf (expected 0)
+  int batches = 0;
+  double struckFraction() const { return emitted > 0 ? static_cast<double>(struck) / emitted : 0.0; }
+};
+
 struct RenderResult {
   Image image;       // Kernel::Shade
   PixelStats pixels; // RenderOptions::pixelStats, --noise-threshold, --time-limit
   ProgressiveSummary progressive;
+  ForwardSummary forward; // settings.method forward
   // Kernel::Hits: per pixel, row-major, vec4(t or -1, hit kind, primitive index, shadow: -1 none
   // traced, 0 lit, 1 occluded).
   std::vector<glm::vec4> hits;

@@ -105,6 +105,9 @@ Renderer::Renderer(const vulkan::Context& context, vulkan::PipelineCache* cache)
   rayTree_ = std::make_unique<vulkan::Buffer>(context, sizeof(gpu::TreeRayHeader) + sizeof(gpu::TreeRay),
                                               vk::BufferUsageFlagBits::eStorageBuffer, vulkan::MemoryUse::DeviceLocal,
                                               "ray tree (unused)");
+  photonImage_ = std::make_unique<vulkan::Buffer>(context, gpu::kPhotonHeaderWords * sizeof(std::uint32_t),
+                                                  vk::BufferUsageFlagBits::eStorageBuffer,
+                                                  vulkan::MemoryUse::DeviceLocal, "photon image (unused)");
 }
 
 Renderer::~Renderer() = default;
@@ -122,6 +125,9 @@ void Renderer::setScene(const Scene& scene, const Features& features) {
 }
 
 RenderResult Renderer::render(const Camera& camera, const RenderSettings& settings, const RenderOptions& options) {
+  if (settings.method == Method::Forward && options.kernel == Kernel::Shade) {
+    return renderForward(camera, settings, options);
+  }
   RenderResult result;
   prepare(camera, settings, options);
   result.features = current_;
@@ -536,6 +542,7 @@ void Renderer::updateDescriptors() {
                         : b == gpu::kBindingEntryPoints ? entryPoints_->handle()
                         : b == gpu::kBindingPixelRays   ? pixelRays_->handle()
                         : b == gpu::kBindingRayTree     ? rayTree_->handle()
+                        : b == gpu::kBindingPhotonImage ? photonImage_->handle()
                                                         : sceneBuffers_.at(b).handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
     writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, &infos[b]);

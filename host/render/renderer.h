@@ -49,6 +49,12 @@ public:
   // Headless: the whole image, in bands, read back and averaged.
   RenderResult render(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
 
+  // Forward tracing (settings.method forward; render() calls it): every light emits
+  // settings.photons photons (shaders/forward.comp), in batches sized to options.bandBudgetMs, and
+  // the image is what passed through the camera's lens. A time limit stops between batches. Needs
+  // camera.aperture > 0: a pinhole receives no photon.
+  RenderResult renderForward(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
+
   // The ray-tree inspector: traces pixel `pixel` alone with the recording kernel (kSpecRecordTree)
   // and returns every ray its samples traced. Samples as a uniform render of settings.spp does
   // (a noise threshold, time limit or adaptive antialiasing is not applied: their sample counts
@@ -137,6 +143,7 @@ private:
   std::unique_ptr<vulkan::Buffer> entryPoints_; // two uvec4 per 8 x 8 tile of the window
   std::unique_ptr<vulkan::Buffer> pixelRays_;   // a uint per pixel of the window (or a placeholder)
   std::unique_ptr<vulkan::Buffer> rayTree_;     // the inspector's records (or a placeholder)
+  std::unique_ptr<vulkan::Buffer> photonImage_; // forward tracing's fixed-point sums (or a placeholder)
   std::uint32_t imageWidth_ = 0;
   std::uint32_t imageRows_ = 0;
   std::uint32_t imagePixelTexels_ = 1;

@@ -42,6 +42,9 @@ enum class Precision { Float32, Float64 }; // arithmetic of ray/surface intersec
 // Texture sampling: the nearest texel or bilinear on the full-size image, or trilinear between the
 // mip levels a ray cone's footprint picks (Akenine-Moller et al., Ray Tracing Gems ch. 20).
 enum class TextureFilter { Nearest, Bilinear, Cone };
+// Backward: rays from the eye (the Whitted tracer). Forward: photons from the lights, counted where
+// they pass through the camera's lens (docs/forward.md).
+enum class Method { Backward, Forward };
 
 // The names of the knobs' values in scene files, on the command line, in the overlay and the benches.
 template <> struct EnumNames<Numerics> {
@@ -66,6 +69,10 @@ template <> struct EnumNames<BvhMode> {
 template <> struct EnumNames<Precision> {
   static constexpr std::array<EnumName<Precision>, 2> values{
       {{Precision::Float32, "float32"}, {Precision::Float64, "float64"}}};
+};
+template <> struct EnumNames<Method> {
+  static constexpr std::array<EnumName<Method>, 2> values{
+      {{Method::Backward, "backward"}, {Method::Forward, "forward"}}};
 };
 template <> struct EnumNames<TextureFilter> {
   static constexpr std::array<EnumName<TextureFilter>, 3> values{
@@ -95,7 +102,12 @@ struct RenderSettings {
   double timeLimit = 0.0;
   int minSpp = 16;
   int maxSpp = 1024;
-  bool progressive() const { return noiseThreshold > 0.0 || timeLimit > 0.0; }
+  // Forward tracing (method forward): photons each light emits; 0: kDefaultPhotons, or with a time
+  // limit as many as the time allows. A time limit may stop a given count sooner.
+  Method method = Method::Backward;
+  std::uint64_t photons = 0;
+  static constexpr std::uint64_t kDefaultPhotons = 1u << 22;
+  bool progressive() const { return method == Method::Backward && (noiseThreshold > 0.0 || timeLimit > 0.0); }
 };
 
 struct Checker {

@@ -13,6 +13,8 @@ inline constexpr long long kMaxImageSide = 16384;           // pixels, width and
 inline constexpr long long kMaxDepthLimit = 64;             // max_depth
 inline constexpr long long kMaxSpp = 4096;                  // samples per pixel
 inline constexpr double kMaxTimeLimitSeconds = 7 * 86400.0; // time_limit: a week
+// photons per light (forward tracing): photon indices are 32-bit
+inline constexpr long long kMaxPhotons = 4'000'000'000ll;
 inline constexpr std::size_t kMaxPolygonVertices = 64;
 inline constexpr std::size_t kMaxPrimitives = 1u << 24;
 inline constexpr std::size_t kMaxMaterialCount = gpu::kMaxMaterials;

@@ -109,7 +109,7 @@ void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sa
 void readRender(const JsonNode& node, RenderSettings& r) {
   node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics", "fresnel",
                   "transmissive_shadows", "precision", "bvh", "texture_filter", "noise_threshold", "time_limit",
-                  "min_spp", "max_spp"});
+                  "min_spp", "max_spp", "method", "photons"});
   if (auto v = node.find("max_depth")) r.maxDepth = static_cast<int>(v->integer(0, kMaxDepthLimit));
   if (auto v = node.find("spp")) r.spp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("bailout")) r.bailout = v->number(0.0, 1.0);
@@ -129,6 +129,8 @@ void readRender(const JsonNode& node, RenderSettings& r) {
     r.timeLimit = v->number(0.0, kMaxTimeLimitSeconds);
     if (!(r.timeLimit > 0.0)) v->fail("must be > 0 seconds, got 0");
   }
+  if (auto v = node.find("method")) r.method = v->enumValue<Method>();
+  if (auto v = node.find("photons")) r.photons = static_cast<std::uint64_t>(v->integer(1, kMaxPhotons));
   if (auto v = node.find("min_spp")) r.minSpp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("max_spp")) r.maxSpp = static_cast<int>(v->integer(1, kMaxSpp));
 }

@@ -58,7 +58,13 @@ VKRAY_CONST(uint, kBindingPixelRays, 20u);
 // TreeRayBuffer: the rays one pixel's samples traced, recorded by the trace kernel where
 // kSpecRecordTree is on (`render --inspect`, the viewer's ray-tree overlay).
 VKRAY_CONST(uint, kBindingRayTree, 21u);
-VKRAY_CONST(uint, kBindingCount, 22u);
+// uint[]: forward tracing's image (shaders/forward.comp): kPhotonHeaderWords of counters (photons
+// struck, lo/hi; rays traced, lo/hi; non-finite contributions), then per pixel and channel a 64-bit
+// fixed-point sum (lo, hi) of the contributions times 2^kPhotonFixedBits.
+VKRAY_CONST(uint, kBindingPhotonImage, 22u);
+VKRAY_CONST(uint, kBindingCount, 23u);
+VKRAY_CONST(uint, kPhotonHeaderWords, 8u);
+VKRAY_CONST(uint, kPhotonFixedBits, 24u);
 
 // Capacities of the uniform copy, 64 KiB in all (the smallest maxUniformBufferRange of the devices
 // vkray targets). On CPU drivers a UBO read is one vector gather, an SSBO read a per-lane scalar
