@@ -171,7 +171,9 @@ TEST(RenderRayTree, EachSampleIsATreeAndTheyAverageToThePixel) {
   std::vector<std::uint32_t> eyeSamples;
   for (const InspectedRay& r : tree.rays) {
     if (r.kind == TreeRayKind::Eye) eyeSamples.push_back(r.sample);
-    if (r.parent) EXPECT_EQ(r.sample, tree.rays[*r.parent].sample);
+    if (r.parent) {
+      EXPECT_EQ(r.sample, tree.rays[*r.parent].sample);
+    }
   }
   EXPECT_EQ(eyeSamples, (std::vector<std::uint32_t>{0, 1, 2, 3}));
   const glm::dvec3 sum = tree.contributionSum();
