@@ -137,6 +137,44 @@ TEST(RenderForward, AMirrorShowsTheLitCeilingAsBackwardTracingDoes) {
   expectNoValidationMessages();
 }
 
+TEST(RenderForward, ThroughGlassAndAHighlightTheImageMeansAgree) {
+  // A glossy floor (Phong lobe) seen through an absorbing glass ball that also shades it: photons
+  // reach the lens through refraction chains, pass the ball on their way from the light with its
+  // transmission and Beer-Lambert absorption, and scatter into the highlight lobe.
+  Scene s = sceneFromJson(R"({
+    "camera": { "position": [0, 3, 0], "look_at": [0, 0, 0], "up": [0, 0, -1], "fov_y": 50, "aperture": 1.0 },
+    "image": { "width": 16, "height": 16 }, "background": [0, 0, 0], "ambient": [0, 0, 0],
+    "render": { "max_depth": 6, "bailout": 0 },
+    "lights": [ { "type": "point", "position": [0.6, 2, 0.4], "color": [1, 0.9, 0.8] } ],
+    "materials": {
+      "floor": { "color": [0.8, 0.6, 0.4], "ambient": 0, "diffuse": 0.7, "specular": 0.3, "shininess": 20 },
+      "glass": { "color": [1, 1, 1], "ambient": 0, "diffuse": 0, "transmission": 0.9, "ior": 1.5,
+                 "absorption": [0.2, 0.1, 0.0] } },
+    "objects": [ { "type": "plane", "normal": [0, 1, 0], "offset": 0, "material": "floor" },
+                 { "type": "sphere", "center": [0, 1.0, 0], "radius": 0.6, "material": "glass" } ] })");
+  s.render.spp = 256;
+  Image backward = render(s).image;
+  RenderResult fwd = renderForward(s, 1u << 24);
+  ASSERT_GT(fwd.forward.struck, 100000u);
+  auto mean = [](const Image& img, std::uint32_t lo, std::uint32_t hi) {
+    double sum = 0.0;
+    for (std::uint32_t y = lo; y < hi; ++y)
+      for (std::uint32_t x = lo; x < hi; ++x) sum += img.at(x, y).r + img.at(x, y).g + img.at(x, y).b;
+    return sum;
+  };
+  const double whole = mean(fwd.image, 0, 16) / mean(backward, 0, 16);
+  const double ball = mean(fwd.image, 5, 11) / mean(backward, 5, 11); // the pixels seen through the ball
+  RecordProperty("mean_ratio", std::to_string(whole));
+  RecordProperty("ball_ratio", std::to_string(ball));
+  // Weights vary here (Fresnel choices, the lobe), so a mean's relative deviation is taken as twice
+  // 1/sqrt(photons struck): 0.55 % for the image (1.3e5 photons), 1.5 % for the 36 pixels of the ball.
+  // Tolerances of about 4 of those. (At 4e8 photons both ratios are within 0.07 % of 1.)
+  EXPECT_NEAR(whole, 1.0, 0.025);
+  EXPECT_NEAR(ball, 1.0, 0.06);
+  EXPECT_EQ(fwd.forward.nonFinite, 0u);
+  expectNoValidationMessages();
+}
+
 TEST(RenderForward, TheStruckFractionFollowsTheLensArea) {
   // Halving the lens radius quarters its area and so the photons it catches (the scattered photons'
   // directions are spread far wider than the lens at the floor's distance).
