@@ -6,6 +6,8 @@
 // a time limit holds, and the command line says what it traced.
 #include <algorithm>
 #include <cmath>
+#include <map>
+#include <sstream>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -289,6 +291,32 @@ TEST(CliForward, PrintsPhotonsAndTheStruckFraction) {
   CliRun p = runVkray("render " + pinhole + " --method forward -q -o " + (dir / "p.png").string(), dir);
   EXPECT_NE(p.exitCode, 0);
   EXPECT_NE(p.err.find("camera.aperture"), std::string::npos) << p.err;
+}
+
+TEST(CliForward, BenchPrintsBothMethodsAndWritesACsv) {
+  auto dir = freshScratchDir("cli-forward-bench");
+  const std::string csv = (dir / "forward.csv").string();
+  CliRun run = runVkray("bench forward " + scenePath("seed.json") +
+                            " --height 8 --runs 1 --reference-spp 4 --max-spp 2 --min-photons 4096 "
+                            "--max-photons 16384 --csv " +
+                            csv,
+                        dir);
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  EXPECT_NE(run.out.find("backward 1 spp: RMS error"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("x backward's time"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("aperture (of focus distance)"), std::string::npos) << run.out;
+  std::istringstream in(slurp(csv));
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(line, "scene,method,count,median_ms,min_ms,max_ms,rms_error,rays,struck_fraction");
+  std::map<std::string, int> rows;
+  while (std::getline(in, line)) {
+    EXPECT_EQ(line.find("nan"), std::string::npos) << line;
+    rows[line.substr(line.find(',') + 1, line.find(',', line.find(',') + 1) - line.find(',') - 1)]++;
+  }
+  EXPECT_EQ(rows["backward"], 2); // 1 and 2 spp
+  EXPECT_EQ(rows["forward"], 2);  // 4096 and 16384 photons
+  EXPECT_EQ(rows["aperture"], 4); // the radius halved three times
 }
 
 TEST(SceneForward, LoadsTheMethodAndPhotonKeys) {

@@ -346,8 +346,14 @@ int runRender(const RenderArgs& args) {
   std::optional<Features> features;
   if (!scene.animation || args.explain) features = analyzeScene(scene, scene.render);
   if (args.explain) {
-    std::printf("%s, %ux%u, max_depth %d, %d spp:\n", args.scene.string().c_str(), scene.render.width,
-                scene.render.height, scene.render.maxDepth, scene.render.spp);
+    const std::string amount = scene.render.method == Method::Forward
+                                   ? (scene.render.photons > 0     ? std::to_string(scene.render.photons)
+                                      : scene.render.timeLimit > 0 ? std::string("as many")
+                                                                   : std::to_string(RenderSettings::kDefaultPhotons)) +
+                                         " photons per light"
+                                   : std::to_string(scene.render.spp) + " spp";
+    std::printf("%s, %ux%u, max_depth %d, %s:\n", args.scene.string().c_str(), scene.render.width, scene.render.height,
+                scene.render.maxDepth, amount.c_str());
     for (const auto& line : features->explain()) std::printf("  %s\n", line.c_str());
     std::fflush(stdout);
   }

@@ -103,6 +103,7 @@ Features analyzeScene(const Scene& scene, const RenderSettings& settings) {
 }
 
 void Features::applySettings(const RenderSettings& settings) {
+  forward = settings.method == Method::Forward;
   // A dielectric reflects too (Fresnel, total internal reflection).
   reflection = anyReflectiveMaterial || anyTransmissiveMaterial;
   refraction = anyTransmissiveMaterial;
@@ -145,6 +146,12 @@ std::vector<std::string> Features::explain() const {
   if (textures) lines.push_back("textures: on (base-colour textures on triangles; sampling compiled in)");
   if (vertexColors) lines.push_back("vertex colours: on (they multiply the base colour)");
   if (alphaMask) lines.push_back("alpha mask: on (cut-out triangles, for shadow rays too)");
+  if (forward) {
+    lines.push_back(std::string("method: forward — photons from ") + plural(static_cast<std::size_t>(lights), "light") +
+                    ", counted where they pass through the lens" +
+                    (thinLens ? "" : " (this camera is a pinhole: none can; give camera.aperture > 0)") +
+                    "; no ambient term or background (no light path carries them)");
+  }
   if (thinLens) {
     lines.push_back("depth of field: on (thin lens, radius " + fmt(aperture) + ", in focus at " + fmt(focusDistance) +
                     "; BVH entry points and row culling off)");

@@ -26,6 +26,8 @@ struct Features {
   bool thinLens = false;
   double aperture = 0.0;      // lens radius
   double focusDistance = 0.0; // of the plane in focus
+  // render.method forward: photons from the lights into the lens (settings, applySettings).
+  bool forward = false;
 
   // Shadows: lights that ask for them, and whether anything could block them at all (a single
   // convex object cannot shadow itself: lights behind a surface are skipped before any ray).
