@@ -58,7 +58,10 @@ ViewerOptions baseViewerOptions(const std::filesystem::path& scene, const Render
                                 const KernelFlags& kernel, const DeviceFlags& device) {
   ViewerOptions o;
   o.scene = scene;
-  o.applyOverrides = [flags = render](RenderSettings& s) { applyRenderFlags(flags, s); };
+  o.applyOverrides = [flags = render](RenderSettings& s) {
+    applyRenderFlags(flags, s);
+    s.method = Method::Backward; // the viewer traces backward; forward tracing is headless (docs/forward.md)
+  };
   // --spp is what each frame adds; the scene's spp is for headless renders.
   o.samplesPerFrame = render.spp;
   o.windowWidth = render.width;
