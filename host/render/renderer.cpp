@@ -47,6 +47,30 @@ vk::raii::PipelineLayout makePipelineLayout(const vulkan::Context& context, cons
   });
 }
 
+// The order in which a progressive pass lists a chunk's n entries: whole workgroups of `group`
+// entries, the groups in van der Corput order (0, 4, 2, 6, 1, 5, ... for 8), each group's entries
+// in their own order. llvmpipe hands each of its threads one contiguous block of a dispatch's
+// workgroups; in list order those blocks would be different parts of the image (sky in one, the
+// scene in another) and one thread would idle while the other finishes. In this order every
+// contiguous block of 1/2, 1/4, ... of the groups samples the whole chunk alike. Which lane traces
+// a pixel does not change its value, so the image is the same.
+void spreadGroups(std::size_t n, std::size_t group, std::vector<std::uint32_t>& order) {
+  // A partial last group goes last, so that every whole group stays aligned to a workgroup (and its
+  // 4 x 2 blocks to the SIMD batches).
+  const std::size_t whole = n / group;
+  unsigned bits = 0;
+  while ((std::size_t{1} << bits) < whole) ++bits;
+  order.clear();
+  order.reserve(n);
+  for (std::size_t k = 0; k < (std::size_t{1} << bits); ++k) {
+    std::size_t g = 0; // k's lowest `bits` bits reversed
+    for (unsigned b = 0; b < bits; ++b) g |= ((k >> b) & 1u) << (bits - 1 - b);
+    if (g >= whole) continue;
+    for (std::size_t j = g * group; j < (g + 1) * group; ++j) order.push_back(static_cast<std::uint32_t>(j));
+  }
+  for (std::size_t j = whole * group; j < n; ++j) order.push_back(static_cast<std::uint32_t>(j));
+}
+
 // Reports progress over all of a render's pixel work (the refine pass weighs like a base pass).
 class ProgressMeter {
 public:
@@ -209,6 +233,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   int passes = 0;
   double lastPassMs = 0.0;
   std::vector<glm::vec4> list, sums;
+  std::vector<std::uint32_t> order; // list position -> entry of the chunk (spreadGroups)
   while (true) {
     const std::uint32_t k = nextPassSamples(settings, samples, open.size(), msPerSample, result.timings.traceMs);
     if (k == 0) break;
@@ -220,8 +245,9 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       std::size_t n = std::clamp<std::size_t>(static_cast<std::size_t>(want), 4096, capacity);
       n = std::min(n, open.size() - first);
       list.resize(n);
+      spreadGroups(n, gpu::kWorkgroupSizeX * gpu::kWorkgroupSizeY, order);
       for (std::size_t j = 0; j < n; ++j) {
-        std::uint32_t i = open[first + j];
+        std::uint32_t i = open[first + order[j]];
         list[j] = glm::vec4(static_cast<float>(i % width), static_cast<float>(i / width), 0.0f, 0.0f);
       }
       prevImage_->write(list.data(), n * sizeof(glm::vec4));
@@ -267,7 +293,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       sums.resize(2 * n);
       image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
       for (std::size_t j = 0; j < n; ++j) {
-        std::uint32_t i = open[first + j];
+        std::uint32_t i = open[first + order[j]];
         acc.add(i % width, i / width, sums[2 * j], sums[2 * j + 1]);
       }
       result.timings.readbackMs += msSince(readStart);
