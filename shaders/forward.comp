@@ -18,7 +18,7 @@
 // emitted per light.
 //
 // Push constants: tileOrigin.x the light, sampleBase the first photon index, sampleCount photons in
-// this dispatch, pad0 a float scale the host applies to every contribution (keeps sums in range).
+// this dispatch, param a float scale the host applies to every contribution (keeps sums in range).
 #version 460
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -93,7 +93,7 @@ void deposit(vec3 lensPoint, vec3 dir, vec3 flux) {
   float pixelArea = (2.0 * length(right) / size.x) * (2.0 * length(up) / size.y);
   float lensArea = kPi * frame.cameraOrigin.w * frame.cameraOrigin.w;
   float c2 = cosTheta * cosTheta;
-  vec3 value = flux * (uintBitsToFloat(pc.pad0) / (lensArea * pixelArea * c2 * c2));
+  vec3 value = flux * (uintBitsToFloat(pc.param) / (lensArea * pixelArea * c2 * c2));
   if (!isFiniteVec(value)) {
     atomicAdd(photonImage[4], 1u);
     return;

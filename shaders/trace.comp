@@ -348,7 +348,13 @@ void main() {
     flushStats();
     return;
   }
-  uvec2 local = invocationPixel(); // a 4 x 2 block per SIMD batch (camera.glsl)
+  // llvmpipe hands each of its threads one contiguous block of a dispatch's workgroups, which in
+  // order is a band of tile rows: one thread would trace the sky while the other traced the scene.
+  // Workgroup row r takes tile row r * stride mod rows (the host's stride is coprime to the rows and
+  // near 0.618 of them), so every block holds rows from all over the dispatch. The pixels are the
+  // same, only which workgroup traces which (Renderer::recordDispatch, spreadStride).
+  uint tileRow = (gl_WorkGroupID.y * max(opaqueUniform(pc.param), 1u)) % gl_NumWorkGroups.y;
+  uvec2 local = invocationPixelIn(uvec2(gl_WorkGroupID.x, tileRow)); // 4 x 2 blocks per SIMD batch
   uvec2 pixel = pc.tileOrigin + local;
   // The dispatch is rounded up to whole workgroups: invocations past the tile or image do nothing,
   // but still take part in flushStats' subgroup sums.

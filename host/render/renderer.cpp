@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <numeric>
 
 #include "render/descriptors.h"
 #include "util/error.h"
@@ -69,6 +70,18 @@ void spreadGroups(std::size_t n, std::size_t group, std::vector<std::uint32_t>& 
     for (std::size_t j = g * group; j < (g + 1) * group; ++j) order.push_back(static_cast<std::uint32_t>(j));
   }
   for (std::size_t j = whole * group; j < n; ++j) order.push_back(static_cast<std::uint32_t>(j));
+}
+
+// The sample pass's tile-row stride for a dispatch `rows` workgroups high (trace.comp, main): coprime
+// to `rows`, so that row r -> r * stride mod rows is a permutation, and near rows / golden ratio, so
+// that any contiguous block of workgroup rows (one llvmpipe thread's share) maps to rows spread over
+// the whole dispatch (the three-distance theorem). 1 (rows in order) for one or two rows.
+std::uint32_t spreadStride(std::uint32_t rows) {
+  if (rows <= 2) return 1;
+  auto stride = static_cast<std::uint32_t>(std::lround(rows * 0.6180339887498949));
+  stride = std::clamp<std::uint32_t>(stride, 1, rows - 1);
+  while (std::gcd(stride, rows) != 1) stride = stride + 1 < rows ? stride + 1 : 1;
+  return stride;
 }
 
 // Reports progress over all of a render's pixel work (the refine pass weighs like a base pass).
@@ -658,6 +671,7 @@ std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const
     for (const RowRun& run : runs) {
       one.tileOrigin = glm::uvec2(push.tileOrigin.x, run.row0);
       one.tileSize = glm::uvec2(push.tileSize.x, run.rows);
+      one.param = spreadStride((run.rows + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY);
       cmd.bindPipeline(vk::PipelineBindPoint::eCompute, (run.empty ? *fill : pipeline).handle());
       cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, one);
       // Round up: the last partial workgroup covers the remaining pixels, the shader bounds-checks.

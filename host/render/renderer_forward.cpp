@@ -125,7 +125,7 @@ RenderResult Renderer::renderForward(const Camera& camera, const RenderSettings&
         push.tileOrigin = glm::uvec2(light, 0);
         push.sampleBase = static_cast<std::uint32_t>(first);
         push.sampleCount = static_cast<std::uint32_t>(count);
-        push.pad0 = std::bit_cast<std::uint32_t>(scale);
+        push.param = std::bit_cast<std::uint32_t>(scale);
         cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, push);
         cmd.dispatch(static_cast<std::uint32_t>((count + kGroupPhotons - 1) / kGroupPhotons), 1, 1);
       }

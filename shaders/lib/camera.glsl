@@ -5,14 +5,17 @@
 
 #include "bindings.glsl"
 
-// of pixels instead of a row of 8, so that its lanes' rays stay closer together and walk, hit and
-// bounce more alike (docs/performance.md, "Pixel blocks"). The workgroup covers the same 8 x 8
-// pixels (row culling's unit), and no pixel's value depends on which lane traces it.
-uvec2 invocationPixel() {
+// Which pixel of the dispatch an invocation traces, for the workgroup tile `group`: each SIMD batch
+// of 8 lanes takes a 4 x 2 block of pixels instead of a row of 8, so that its lanes' rays stay
+// closer together and walk, hit and bounce more alike (docs/performance.md, "Pixel blocks"). The
+// workgroup covers the same 8 x 8 pixels (row culling's unit), and no pixel's value depends on
+// which lane traces it.
+uvec2 invocationPixelIn(uvec2 group) {
   uvec2 l = gl_LocalInvocationID.xy;
   uvec2 inGroup = uvec2((l.x & 3u) + 4u * (l.y & 1u), 2u * (l.y >> 1u) + (l.x >> 2u));
-  return gl_WorkGroupID.xy * uvec2(kWorkgroupSizeX, kWorkgroupSizeY) + inGroup;
+  return group * uvec2(kWorkgroupSizeX, kWorkgroupSizeY) + inGroup;
 }
+uvec2 invocationPixel() { return invocationPixelIn(gl_WorkGroupID.xy); }
 
 // Direction, unnormalized, of the eye ray through a point of the image plane given in pixels (x
 // right, y down, (0,0) top-left).

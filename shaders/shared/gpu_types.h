@@ -474,7 +474,9 @@ struct PushConstants {
   uint imageRow0;   // image row held by Image[0]
   uint prevRow0;    // image row held by PrevImage[0]
   uint prevRows;    // rows held by PrevImage[]
-  uint pad0;
+  // Per kernel: trace.comp's tile-row stride (the sample pass, see Renderer::recordDispatch; 0 or 1:
+  // rows in order); forward.comp's contribution scale (float bits).
+  uint param;
 };
 
 // ---- The ray-tree recorder (kSpecRecordTree, shaders/lib/tree_record.glsl) ----------------------
