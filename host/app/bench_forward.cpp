@@ -188,12 +188,12 @@ int runBenchForward(const BenchForwardArgs& args) {
     std::uint64_t photons = std::max<std::uint64_t>(1u << 16, args.maxPhotons / 4);
     for (int step = 0; step < 4; ++step, photons *= 4) {
       const double a = args.aperture / double(1 << step);
-      Scene s = scene;
-      s.camera.aperture = a * distance;
+      Camera lens = scene.camera;
+      lens.aperture = a * distance;
       RenderSettings fs = scene.render;
       fs.method = Method::Forward;
       fs.photons = std::min<std::uint64_t>(photons, kMaxPhotons);
-      RenderResult r = renderer.render(s.camera, fs, options);
+      RenderResult r = renderer.render(lens, fs, options);
       const double fraction = r.forward.struckFraction();
       std::printf("%-28.5g %12llu %10.3g %14.3g\n", a, static_cast<unsigned long long>(fs.photons), fraction,
                   fraction / (a * a));

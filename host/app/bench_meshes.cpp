@@ -17,6 +17,7 @@
 #include "app/bench.h"
 #include "render/gpu_scene.h"
 #include "render/renderer.h"
+#include "util/clock.h"
 #include "util/error.h"
 #include "vk/context.h"
 
@@ -58,12 +59,6 @@ MeshData proceduralTorus(std::size_t triangles) {
 }
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
 // CPU time of the whole process (every lavapipe worker thread included), in ms. On a shared,
 // noisy machine it varies far less than wall or GPU-timestamp time.

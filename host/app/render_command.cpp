@@ -15,6 +15,7 @@
 #include "scene/features.h"
 #include "scene/scene_fingerprint.h"
 #include "scene/scene_loader.h"
+#include "util/clock.h"
 #include "util/error.h"
 #include "vk/context.h"
 #include "vk/host_pages.h"
@@ -22,11 +23,6 @@
 namespace vkray {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-double msSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
 void printStat(const char* name, double ms) {
   std::printf("%s: %.2f ms\n", name, ms);

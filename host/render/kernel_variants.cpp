@@ -207,9 +207,6 @@ std::unique_ptr<vulkan::ComputePipeline>& KernelLibrary::traceSlot(const Pipelin
     throw InputError("render.precision", "float64 needs shaderFloat64, which " + context_.info().name + " lacks");
   }
   if (f64 && key.kernel == Kernel::Hits) throw InputError("render.precision", "the ray-query kernel is float32 only");
-  if (f64 && key.kernel == Kernel::Forward) {
-    throw InputError("render.precision", "forward tracing is float32 only");
-  }
   std::span<const std::uint32_t> code = key.kernel == Kernel::Hits      ? std::span<const std::uint32_t>(kHitsSpv)
                                         : key.kernel == Kernel::Aov     ? std::span<const std::uint32_t>(kAovSpv)
                                         : key.kernel == Kernel::Forward ? std::span<const std::uint32_t>(kForwardSpv)

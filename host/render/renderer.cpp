@@ -7,17 +7,12 @@
 #include <numeric>
 
 #include "render/descriptors.h"
+#include "util/clock.h"
 #include "util/error.h"
 
 namespace vkray {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
 // Bytes of image window the renderer allows itself: bands of rows are traced into it and read back.
 constexpr vk::DeviceSize kImageWindowBudget = 64ull << 20;

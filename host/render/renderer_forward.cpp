@@ -6,17 +6,12 @@
 
 #include "render/renderer.h"
 #include "scene/scene_limits.h"
+#include "util/clock.h"
 #include "util/error.h"
 
 namespace vkray {
 
 namespace {
-
-using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point t) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - t).count();
-}
 
 // Photons per workgroup (the kernel's 8 x 8 invocations, one photon each), and the most one
 // dispatch may hold (65535 workgroups, the least maxComputeWorkGroupCount[0] a device may have).
