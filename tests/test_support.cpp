@@ -46,6 +46,44 @@ Scene sceneFromJson(const std::string& json, const std::string& name) {
   return loadSceneFromString(json, name, VKRAY_SOURCE_DIR "/scenes");
 }
 
+bool variantsExact() {
+  return gpu().info().type == "CPU";
+}
+
+bool sameColour(const glm::vec3& a, const glm::vec3& b) {
+  if (variantsExact()) return a == b;
+  const glm::vec3 d = glm::abs(a - b);
+  return std::max(d.x, std::max(d.y, d.z)) <= kVariantTolerance;
+}
+
+void expectSameImageAcrossVariants(const Image& a, const Image& b) {
+  ASSERT_EQ(a.width, b.width);
+  ASSERT_EQ(a.height, b.height);
+  if (variantsExact()) {
+    EXPECT_EQ(a.pixels, b.pixels);
+    return;
+  }
+  int unexplained = 0;
+  for (std::uint32_t y = 0; y < a.height; ++y) {
+    for (std::uint32_t x = 0; x < a.width; ++x) {
+      bool explained = false;
+      for (int dy = -1; dy <= 1 && !explained; ++dy) {
+        for (int dx = -1; dx <= 1 && !explained; ++dx) {
+          const int nx = static_cast<int>(x) + dx, ny = static_cast<int>(y) + dy;
+          if (nx < 0 || ny < 0 || nx >= static_cast<int>(a.width) || ny >= static_cast<int>(a.height)) continue;
+          explained = sameColour(a.at(static_cast<std::uint32_t>(nx), static_cast<std::uint32_t>(ny)), b.at(x, y));
+        }
+      }
+      if (!explained) {
+        ++unexplained;
+        ADD_FAILURE() << "pixel " << x << "," << y << ": no neighbour of the other variant's image is within "
+                      << kVariantTolerance;
+        if (unexplained > 10) return;
+      }
+    }
+  }
+}
+
 RenderResult render(const Scene& scene, RenderOptions options) {
   Renderer& r = renderer();
   r.setScene(scene);

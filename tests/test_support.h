@@ -30,6 +30,24 @@ Scene sceneFromJson(const std::string& json, const std::string& name = "test.jso
 // Renders a scene with its own settings (tests adjust scene.render first), counting rays.
 RenderResult render(const Scene& scene, RenderOptions options = {});
 
+// Whether two kernel variants (specialized or not, shadows compiled in or out, the query kernel and
+// the renderer) must give the same pixels bit for bit on the test device. Vulkan lets a compiler
+// contract a * b + c into one fused operation outside `precise` code, and a compiler may contract
+// the same expression differently in two variants of a kernel: llvmpipe's JIT compiles it alike in
+// every variant, NVIDIA's compiler did not (tools/device-check on an H200, driver 580.159: 2 of 15
+// bundled scenes differed in their last bits between the specialized and the general kernel). The
+// CPU driver is the reference and is held to exact equality; other devices to kVariantTolerance.
+bool variantsExact();
+// How far two variants' values may be apart where variantsExact() is false: 1e-4 of a unit, a
+// fortieth of an 8-bit level, far below anything a test tells apart (a shadow, a missed object).
+constexpr float kVariantTolerance = 1e-4f;
+// The same colour, as variantsExact() asks: bit for bit, or within kVariantTolerance per channel.
+bool sameColour(const glm::vec3& a, const glm::vec3& b);
+// Two variants' images of one scene agree: bit for bit where variantsExact(); elsewhere every pixel
+// within kVariantTolerance of some pixel of the other image's 3 x 3 neighbourhood (a last bit may
+// move an edge, a glass path or a checker line by a pixel, never add what no neighbour has).
+void expectSameImageAcrossVariants(const Image& a, const Image& b);
+
 // Fails the current test if the validation layer reported anything since the last check.
 void expectNoValidationMessages();
 

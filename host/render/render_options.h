@@ -54,6 +54,9 @@ struct RenderOptions {
   bool progressive = false;    // samples from the per-pixel sequence even at 1 spp (viewer frames)
   bool countStats = true;      // ray counters (a specialization; off costs nothing)
   double bandBudgetMs = 100.0; // target GPU time of one submission (watchdog-safe)
+  // Forward tracing: at most this many photons per light in one batch (0: as many as the band budget
+  // allows). The sums do not depend on the split; tests use it to split the same photons on any device.
+  std::uint64_t maxBatchPhotons = 0;
   // Rows of workgroups whose every eye ray provably meets nothing are filled with the background
   // instead of traced (render/row_culling.h; the image is the same). Off: --no-row-culling.
   bool cullRows = true;

@@ -101,6 +101,7 @@ RenderResult Renderer::renderForward(const Camera& camera, const RenderSettings&
         if (batch == 0) break;
       }
     }
+    if (options.maxBatchPhotons > 0) batch = std::min(batch, options.maxBatchPhotons);
     batch = std::clamp<std::uint64_t>(batch, 1, std::min(kMaxDispatchPhotons, cap - done));
     const std::uint64_t first = done;
     const std::uint64_t count = batch;
