@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -191,6 +192,38 @@ TEST_F(Cli, MissingSceneFile) {
   RunResult r = vkray("render /nonexistent/scene.json -o '" + (dir_ / "x.png").string() + "'");
   EXPECT_EQ(r.exitCode, 1);
   EXPECT_EQ(r.err, "vkray: error: /nonexistent/scene.json: no such file\n");
+}
+
+// VKRAY_LOG_STEPS=1: each step says on standard error when it starts and how long it took
+// (docs/reliability.md), so a run that hangs names the step it hangs in; tools/device-check reads
+// it to tell a compiling driver from a running kernel.
+TEST_F(Cli, StepLogNamesEveryStepAndHowLongItTook) {
+  ::setenv("VKRAY_LOG_STEPS", "1", 1);
+  RunResult r = vkray("render '" + scene("seed.json") + "' --width 16 --height 12 --inspect 8,6 --inspect-out '" +
+                      (dir_ / "tree.json").string() + "' --no-pipeline-cache");
+  ::unsetenv("VKRAY_LOG_STEPS");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  const std::regex started(R"(vkray \[ *[0-9]+\.[0-9]{3} s\] (.+) \.\.\.)");
+  const std::regex ended(R"(vkray \[ *[0-9]+\.[0-9]{3} s\] (.+) \.\.\. done in [0-9]+\.[0-9] ms)");
+  std::map<std::string, int> running; // step -> starts not yet ended
+  int steps = 0;
+  std::istringstream lines(r.err);
+  for (std::string line; std::getline(lines, line);) {
+    std::smatch m;
+    if (std::regex_match(line, m, ended)) {
+      EXPECT_GT(running[m[1]]--, 0) << "ended before it started: " << line;
+    } else if (std::regex_match(line, m, started)) {
+      ++running[m[1]];
+      ++steps;
+    } else {
+      ADD_FAILURE() << "not a step line: " << line;
+    }
+  }
+  for (const auto& [step, n] : running) EXPECT_EQ(n, 0) << "never ended: " << step;
+  EXPECT_TRUE(running.count("creating pipeline 'trace'")) << r.err;
+  EXPECT_TRUE(running.count("inspecting rows 6..6")) << r.err;
+  EXPECT_GT(steps, 10);
+  // Off (the default), a run prints nothing on standard error (Cli.RendersAPngWithStatistics).
 }
 
 TEST_F(Cli, ExplainSaysWhatTheSceneCallsFor) {

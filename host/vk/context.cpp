@@ -3,8 +3,10 @@
 
 #include <algorithm>
 #include <cctype>
+#include <chrono>
 #include <cstdio>
 #include <cstdlib>
+#include <exception>
 #include <sstream>
 
 #include "util/error.h"
@@ -188,6 +190,41 @@ void ValidationLog::clear() {
   messages_.clear();
 }
 
+namespace {
+
+// Seconds since the first use of the step log (the process's first Vulkan step, near its start).
+double stepClockS() {
+  using Clock = std::chrono::steady_clock;
+  static const Clock::time_point origin = Clock::now();
+  return std::chrono::duration<double>(Clock::now() - origin).count();
+}
+
+} // namespace
+
+bool stepLogEnabled() {
+  static const bool enabled = [] {
+    const char* v = std::getenv("VKRAY_LOG_STEPS");
+    return v != nullptr && *v != '\0' && std::string_view(v) != "0";
+  }();
+  return enabled;
+}
+
+// One fprintf per line: lines from the threads that build pipelines side by side do not interleave.
+StepLog::StepLog(std::string_view step) {
+  if (!stepLogEnabled()) return;
+  step_ = step;
+  exceptions_ = std::uncaught_exceptions();
+  startS_ = stepClockS();
+  std::fprintf(stderr, "vkray [%8.3f s] %s ...\n", startS_, step_.c_str());
+}
+
+StepLog::~StepLog() {
+  if (step_.empty()) return;
+  const double now = stepClockS();
+  const char* how = std::uncaught_exceptions() > exceptions_ ? "failed after" : "done in";
+  std::fprintf(stderr, "vkray [%8.3f s] %s ... %s %.1f ms\n", now, step_.c_str(), how, (now - startS_) * 1e3);
+}
+
 void rethrowVulkanError(std::string_view step, const vk::SystemError& e) {
   std::string what = std::string(step) + ": " + e.what();
   if (e.code() == vk::make_error_code(vk::Result::eErrorDeviceLost)) {
@@ -331,7 +368,11 @@ void Context::submitAndWait(std::string_view step,
     vk::CommandBuffer handle = *cmd;
     queue_.submit(vk::SubmitInfo({}, {}, handle), *fence);
     // Wait without a timeout limit but in slices, so a hang shows as a hang, not a busy loop.
-    while (device_.waitForFences(*fence, VK_TRUE, 1'000'000'000ull) == vk::Result::eTimeout) {
+    for (int waited = 1; device_.waitForFences(*fence, VK_TRUE, 1'000'000'000ull) == vk::Result::eTimeout; ++waited) {
+      if (stepLogEnabled()) {
+        std::fprintf(stderr, "vkray [%8.3f s] %.*s: still waiting for the device after %d s\n", stepClockS(),
+                     static_cast<int>(step.size()), step.data(), waited);
+      }
     }
   });
 }

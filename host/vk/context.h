@@ -134,8 +134,27 @@ template <typename F> auto vulkanStep(std::string_view step, F&& f) -> decltype(
 // The message a lost device or failed call reports: "step: vkCall: VK_ERROR_...".
 [[noreturn]] void rethrowVulkanError(std::string_view step, const vk::SystemError& e);
 
+// With VKRAY_LOG_STEPS=1 in the environment, each named step says on standard error when it
+// starts and how long it took ("vkray [  1.234 s] creating pipeline 'trace' ...", then "... done in
+// 412.3 ms"), and a GPU wait says every second that it is still waiting: a step that never returns
+// names itself, whether the driver is compiling or the device is running (docs/reliability.md).
+bool stepLogEnabled();
+class StepLog {
+public:
+  explicit StepLog(std::string_view step);
+  ~StepLog();
+  StepLog(const StepLog&) = delete;
+  StepLog& operator=(const StepLog&) = delete;
+
+private:
+  std::string step_; // empty when the log is off
+  int exceptions_ = 0;
+  double startS_ = 0.0;
+};
+
 template <typename F> auto vulkanStep(std::string_view step, F&& f) -> decltype(f()) {
   try {
+    StepLog log(step);
     return f();
   } catch (const vk::SystemError& e) {
     rethrowVulkanError(step, e);
