@@ -76,6 +76,8 @@ TEST_F(Cli, RendersAPngWithStatistics) {
   EXPECT_EQ(culled % 8, 0);
   EXPECT_NE(stats["culled rows"].find(" of 48"), std::string::npos);
   EXPECT_NE(stats["trace"].find(" ms"), std::string::npos);
+  // Each pipeline built says what its creation and its first (empty) dispatch took.
+  EXPECT_NE(stats["pipeline trace"].find(", first dispatch "), std::string::npos) << r.out;
   EXPECT_GT(std::stod(stats["rays per second"]), 0.0);
 }
 
@@ -222,6 +224,13 @@ TEST_F(Cli, StepLogNamesEveryStepAndHowLongItTook) {
   for (const auto& [step, n] : running) EXPECT_EQ(n, 0) << "never ended: " << step;
   EXPECT_TRUE(running.count("creating pipeline 'trace'")) << r.err;
   EXPECT_TRUE(running.count("inspecting rows 6..6")) << r.err;
+  // A new pipeline is dispatched once, empty, before any work (lavapipe generates its code then).
+  const auto created = r.err.find("creating pipeline 'trace' ... done");
+  const auto first = r.err.find("first dispatch of pipeline 'trace' ... done");
+  const auto traced = r.err.find("inspecting rows 6..6 ...");
+  ASSERT_NE(first, std::string::npos) << r.err;
+  EXPECT_LT(created, first);
+  EXPECT_LT(first, traced);
   EXPECT_GT(steps, 10);
   // Off (the default), a run prints nothing on standard error (Cli.RendersAPngWithStatistics).
 }

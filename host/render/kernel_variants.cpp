@@ -186,6 +186,7 @@ KernelSet KernelLibrary::realize(const KernelPlan& plan) {
     for (const Job& job : jobs) {
       const vulkan::ComputePipeline& p = **job.slot;
       set.built.push_back(PipelineBuild{job.name, p.creationMs(), p.foldMs(), p.spirvBytes()});
+      set.builtPipelines.push_back(&p);
     }
     if (cache_) cache_->save();
   }

@@ -71,8 +71,10 @@ struct KernelSet {
   const vulkan::ComputePipeline* quietFill = nullptr; // quietSample's
   const vulkan::ComputePipeline* entry = nullptr;
   double buildMs = 0.0; // wall time building this set's new pipelines, side by side (0: all reused)
-  // Each pipeline built for this set, with its own creation time, in plan order.
+  // Each pipeline built for this set, with its own creation time, in plan order, and the
+  // pipeline itself (builtPipelines[i] is built[i]'s).
   std::vector<PipelineBuild> built;
+  std::vector<const vulkan::ComputePipeline*> builtPipelines;
 };
 
 class KernelLibrary {

@@ -87,12 +87,17 @@ inline bool progressiveRender(const RenderSettings& settings, const RenderOption
   return options.kernel == Kernel::Shade && (settings.progressive() || options.pixelStats);
 }
 
-// One pipeline built for a render: what creating it took, the SPIR-V folding included.
+// One pipeline built for a render: what creating it took, the SPIR-V folding and its first
+// dispatch included.
 struct PipelineBuild {
   std::string name;
   double ms = 0.0;
   double foldMs = 0.0;        // folding the specialization into the SPIR-V (0: not folded)
   std::size_t spirvBytes = 0; // the module the driver compiled
+  // An empty dispatch right after creation (Renderer::prepare): lavapipe generates the machine
+  // code at a pipeline's first dispatch, not at vkCreateComputePipelines, so that is where most of
+  // its compile is (or its load from Mesa's on-disk shader cache).
+  double firstDispatchMs = 0.0;
 };
 
 struct RenderTimings {

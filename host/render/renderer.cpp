@@ -502,6 +502,35 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   ensureImageWindow(settings.width, rows, pixelTexels, adaptive || progressiveRender(settings, options),
                     options.pixelRays);
   writeFrameParams(camera, settings, current_);
+  firstDispatchNewPipelines();
+}
+
+void Renderer::firstDispatchNewPipelines() {
+  // lavapipe turns a pipeline into machine code only when it is first dispatched (llvmpipe keys
+  // that code on the resources bound, so the descriptor set is the render's own), and Mesa keeps it
+  // in its on-disk shader cache for the next process: without this step the compile, seconds on a
+  // cold cache, landed in the first band's trace time. All push constants zero: an empty tile, no
+  // samples, no photons; each kernel returns before it touches a pixel or a counter.
+  for (std::size_t i = 0; i < kernels_.builtPipelines.size(); ++i) {
+    PipelineBuild& build = kernels_.built[i];
+    auto start = Clock::now();
+    context_.submitAndWait("first dispatch of pipeline '" + build.name + "'", [&](const vk::raii::CommandBuffer& cmd) {
+      cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
+      cmd.bindPipeline(vk::PipelineBindPoint::eCompute, kernels_.builtPipelines[i]->handle());
+      cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0,
+                                            gpu::PushConstants{});
+      cmd.dispatch(1, 1, 1);
+      // Its counter atomics add zero, but they are writes: visible before the host's next access.
+      vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
+                                vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eHostWrite);
+      cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eHost, {}, barrier, {},
+                          {});
+    });
+    build.firstDispatchMs = msSince(start);
+    build.ms += build.firstDispatchMs;
+    kernels_.buildMs += build.firstDispatchMs;
+  }
+  kernels_.builtPipelines.clear(); // once per build: a reused set is not dispatched again
 }
 
 void Renderer::recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count,

@@ -104,6 +104,9 @@ private:
   void ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::uint32_t pixelTexels, bool needPrev,
                          bool pixelRays = false);
   void writeFrameParams(const Camera& camera, const RenderSettings& settings, const Features& f);
+  // Dispatches each pipeline prepare() just built once over an empty tile (every invocation
+  // returns at once) and adds the time to its build: a CPU driver compiles at the first dispatch.
+  void firstDispatchNewPipelines();
   void updateDescriptors();
   // fill: the background pipeline for rows that see nothing (row culling), or null to trace all.
   // timer: timestamps around the dispatches, or null. Returns how many rows went to `fill`.
