@@ -260,8 +260,8 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   if (!cache) {
     std::printf("pipeline cache: off\n");
   } else if (std::size_t kept = cache->keptBytes(); kept == 0) {
-    // The driver accepts the cache but stores nothing in it: every run compiles the kernel anew.
-    // lavapipe keeps nothing here; Mesa's own shader cache keeps its machine code (first dispatch).
+    // The driver accepts the cache but stores nothing in it. lavapipe is such a driver: Mesa's own
+    // on-disk shader cache keeps its machine code instead (each pipeline's first dispatch).
     std::printf("pipeline cache: 0 bytes kept by the driver (it keeps nothing in a VkPipelineCache)\n");
   } else {
     std::printf("pipeline cache: %zu bytes kept by the driver, %s\n", kept,
