@@ -207,6 +207,8 @@ TEST_F(Cli, StepLogNamesEveryStepAndHowLongItTook) {
   ASSERT_EQ(r.exitCode, 0) << r.err;
   const std::regex started(R"(vkray \[ *[0-9]+\.[0-9]{3} s\] (.+) \.\.\.)");
   const std::regex ended(R"(vkray \[ *[0-9]+\.[0-9]{3} s\] (.+) \.\.\. done in [0-9]+\.[0-9] ms)");
+  // A wait of a second or more (a cold compile at a pipeline's first dispatch) says so each second.
+  const std::regex waiting(R"(vkray \[ *[0-9]+\.[0-9]{3} s\] (.+): still waiting for the device after [0-9]+ s)");
   std::map<std::string, int> running; // step -> starts not yet ended
   int steps = 0;
   std::istringstream lines(r.err);
@@ -217,6 +219,8 @@ TEST_F(Cli, StepLogNamesEveryStepAndHowLongItTook) {
     } else if (std::regex_match(line, m, started)) {
       ++running[m[1]];
       ++steps;
+    } else if (std::regex_match(line, m, waiting)) {
+      EXPECT_GT(running[m[1]], 0) << "waiting in a step not started: " << line;
     } else {
       ADD_FAILURE() << "not a step line: " << line;
     }
