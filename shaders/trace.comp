@@ -5,6 +5,7 @@
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
 #extension GL_KHR_shader_subgroup_basic : require
+#extension GL_KHR_shader_subgroup_shuffle : require
 
 #include "shared/gpu_types.h"
 
@@ -304,40 +305,74 @@ void flushStats() {
   }
 }
 
-// A progressive pass (host/render/adaptive.h): invocation `entry` traces the pixel the host listed
-// at that entry of the pass input, (x, y) as floats; the list holds only the pixels still open, so
-// SIMD lanes stay full however few remain. Two texels per entry: (sum rgb, samples) and (sum of
-// squares rgb, rays traced), from which the host estimates each pixel's standard error.
+// A progressive pass (host/render/adaptive.h): the host lists the pixels still open, (x, y) as
+// floats, so SIMD lanes stay full however few remain. Two texels per entry: (sum rgb, samples) and
+// (sum of squares rgb, rays traced), from which the host estimates each pixel's standard error.
+//
+// `pc.param` lanes (a power of two; 1 when the dispatch takes one sample per pixel) share one entry
+// and trace its samples side by side, lane j sample j of each round: late passes list scattered
+// pixels, and lanes of eight different pixels walk different nodes, materials and textures, where a
+// pixel's own samples, a fraction of a pixel apart, take nearly the same path. Work is assigned by
+// subgroup, so a pixel's lanes are one subgroup's whatever the driver's mapping of invocations.
 void listPass() {
-  uint entry = gl_WorkGroupID.x * (kWorkgroupSizeX * kWorkgroupSizeY) + gl_LocalInvocationIndex;
-  if (entry >= pc.tileSize.x) return;
+  uint lanes = min(max(opaqueUniform(pc.param), 1u), gl_SubgroupSize);
+  uint item = gl_WorkGroupID.x * (kWorkgroupSizeX * kWorkgroupSizeY) + gl_SubgroupID * gl_SubgroupSize +
+              gl_SubgroupInvocationID;
+  uint entry = item / lanes;
+  uint lane = gl_SubgroupInvocationID & (lanes - 1u);
+  uint firstLane = gl_SubgroupInvocationID - lane; // of this entry's lanes
+  // Past the list's end a lane traces nothing but still takes part in its subgroup's shuffles.
+  bool listed = entry < pc.tileSize.x;
+  entry = min(entry, pc.tileSize.x - 1u);
   uvec2 pixel = uvec2(imageLoad(prevTexels, int(entry)).xy);
   loadEntryPoints(pixel, 0u); // the host found them for the whole image, per lane's own tile
   uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
   uint count = opaqueUniform(pc.sampleCount);
   // The sums start from the entry's earlier dispatches of this pass: each sample is added to the
-  // running sum one at a time, whether the host gave a dispatch one sample or several, so the
-  // float rounding (and the image) does not depend on how the host split the pass.
+  // running sum one at a time, in the sequence's order, whether the host gave a dispatch one sample
+  // or several and however many lanes traced them, so the float rounding (and the image) does not
+  // depend on how the host split the pass.
   vec4 first = vec4(0.0);
   vec4 second = vec4(0.0);
   if ((opaqueUniform(pc.flags) & kFlagAccumulate) != 0u) {
     first = imageLoad(imageTexels, int(2u * entry));
     second = imageLoad(imageTexels, int(2u * entry + 1u));
   }
-  uint k = 0u;
-  while (true) { // tested at the bottom, as in sampleSum
-    vec2 lensUv = THIN_LENS ? lensSample(pc.sampleBase + k, hashPcg(index)) : vec2(0.0);
-    vec3 radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)), lensUv);
-    first.rgb += radiance;
-    second.rgb += radiance * radiance;
-    ++k;
-    if (k >= count) break;
+  uint round0 = 0u; // this round's first sample
+  while (true) {    // tested at the bottom, as in sampleSum
+    uint k = round0 + lane;
+    vec3 radiance = vec3(0.0);
+    if (listed && k < count) {
+      vec2 lensUv = THIN_LENS ? lensSample(pc.sampleBase + k, hashPcg(index)) : vec2(0.0);
+      radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)), lensUv);
+    }
+    if (lanes == 1u) {
+      first.rgb += radiance;
+      second.rgb += radiance * radiance;
+    } else {
+      for (uint j = 0u; j < lanes; ++j) {
+        vec3 r = subgroupShuffle(radiance, firstLane + j);
+        if (round0 + j < count) {
+          first.rgb += r;
+          second.rgb += r * r;
+        }
+      }
+    }
+    round0 += lanes;
+    if (round0 >= count) break;
   }
   uint rays = COUNT_STATS ? gCount.eyeRays + gCount.shadowRays + gCount.reflectionRays + gCount.refractionRays : 0u;
-  first.w += float(count);
-  second.w += float(rays);
-  imageStore(imageTexels, int(2u * entry), first);
-  imageStore(imageTexels, int(2u * entry + 1u), second);
+  if (COUNT_STATS && lanes > 1u) {
+    uint own = rays;
+    rays = 0u;
+    for (uint j = 0u; j < lanes; ++j) rays += subgroupShuffle(own, firstLane + j);
+  }
+  if (listed && lane == 0u) {
+    first.w += float(count);
+    second.w += float(rays);
+    imageStore(imageTexels, int(2u * entry), first);
+    imageStore(imageTexels, int(2u * entry + 1u), second);
+  }
 }
 
 void main() {

@@ -18,12 +18,14 @@ vk::PhysicalDeviceSubgroupProperties subgroups(vk::ShaderStageFlags stages, vk::
 TEST(DeviceChoice, MissingSubgroupOperationsAreNamed) {
   using Op = vk::SubgroupFeatureFlagBits;
   using Stage = vk::ShaderStageFlagBits;
-  const vk::SubgroupFeatureFlags all = Op::eBasic | Op::eArithmetic | Op::eBallot;
+  const vk::SubgroupFeatureFlags all = Op::eBasic | Op::eArithmetic | Op::eBallot | Op::eShuffle;
   EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute, all)), "");
   EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute | Stage::eFragment, all | Op::eVote)), "");
-  EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute, Op::eBasic | Op::eArithmetic)), "ballot");
-  EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute, Op::eBasic | Op::eVote)), "arithmetic, ballot");
-  EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute, {})), "basic, arithmetic, ballot");
+  EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute, Op::eBasic | Op::eArithmetic | Op::eShuffle)),
+            "ballot");
+  EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute, Op::eBasic | Op::eVote)),
+            "arithmetic, ballot, shuffle");
+  EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eCompute, {})), "basic, arithmetic, ballot, shuffle");
   EXPECT_EQ(vulkan::missingSubgroupSupport(subgroups(Stage::eFragment, all)), "subgroups in compute shaders");
 }
 

@@ -4,6 +4,7 @@
 // deterministic and keeps its cap, and that a time limit holds.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <limits>
 #include <numeric>
 
@@ -238,6 +239,33 @@ TEST(RenderProgressive, ListPassesStartFromTheEntryPointsOfTheWholeImage) {
     worst = std::max(worst, maxChannelDiff(plain.image.pixels[i], r.image.pixels[i]));
   EXPECT_LT(worst, 1e-5);
   EXPECT_EQ(r.stats.total(), plain.stats.total()); // the same rays, from the same hits
+}
+
+TEST(RenderProgressive, LanesSharingAPixelChangeNothing) {
+  // Passes of 16 samples or more are traced by lanes that share a pixel, side by side (trace.comp,
+  // listPass), and where the driver lets loops run to their end one dispatch takes a whole pass.
+  // The simplest schedule, one sample of each listed pixel per dispatch and one invocation per
+  // pixel, adds the same samples in the same order: the same image bit for bit, and the same
+  // samples, rays and error estimates per pixel.
+  Scene s = noisyScene();
+  s.render.noiseThreshold = 0.003;
+  s.render.maxSpp = 128;
+  RenderOptions o;
+  o.pixelStats = true;
+  RenderResult shared = render(s, o);
+  o.oneSamplePerDispatch = true;
+  RenderResult simple = render(s, o);
+  ASSERT_GE(shared.progressive.sppMax, 64.0) << "passes of 32 samples and more, traced by 4 lanes or more";
+  ASSERT_EQ(shared.image.pixels.size(), simple.image.pixels.size());
+  EXPECT_EQ(0, std::memcmp(shared.image.pixels.data(), simple.image.pixels.data(),
+                           shared.image.pixels.size() * sizeof(glm::vec3)));
+  EXPECT_EQ(shared.pixels.samples, simple.pixels.samples);
+  EXPECT_EQ(shared.pixels.rays, simple.pixels.rays);
+  EXPECT_EQ(shared.pixels.error, simple.pixels.error);
+  EXPECT_EQ(shared.stats.total(), simple.stats.total());
+  // Each pixel's rays, summed over its lanes, add up to the render's.
+  EXPECT_EQ(std::accumulate(shared.pixels.rays.begin(), shared.pixels.rays.end(), 0.0),
+            static_cast<double>(shared.stats.total()));
 }
 
 TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) {

@@ -60,6 +60,10 @@ void addKernelFlags(CLI::App& app, KernelFlags& f) {
                "trace rows whose eye rays provably miss everything instead of filling them (for comparison)");
   app.add_flag("--no-entry-points", f.noEntryPoints,
                "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
+  app.add_flag("--one-sample-per-dispatch", f.oneSamplePerDispatch,
+               "trace one sample of each pixel per dispatch, one invocation per pixel, as on a driver that cuts "
+               "long loops short, instead of all of a band's samples in one dispatch (the same image; for "
+               "comparison)");
   app.add_option("--scene-memory", f.sceneMemory,
                  "where the kernel reads small scenes from: auto, uniform or storage buffers")
       ->check(CLI::IsMember(enumNameList<SceneMemory>()));
@@ -71,6 +75,7 @@ void applyKernelFlags(const KernelFlags& f, RenderOptions& o) {
   o.unroll = !f.noUnroll;
   o.cullRows = !f.noRowCulling;
   o.entryPoints = !f.noEntryPoints;
+  o.oneSamplePerDispatch = f.oneSamplePerDispatch;
   o.sceneMemory = *parseEnum<SceneMemory>(f.sceneMemory);
 }
 

@@ -218,6 +218,14 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   } else {
     std::printf("spp: %d\n", scene.render.spp);
   }
+  if (scene.render.method != Method::Forward && (scene.render.spp > 1 || prog.passes > 0)) {
+    // Where the driver cuts long loops (Mesa 22's llvmpipe), each sample gets a dispatch of its own.
+    if (renderer.samplesTogether()) {
+      std::printf("dispatches: one per band or pass for all its samples (the driver runs loops to their end)\n");
+    } else if (std::uint32_t limit = renderer.driverLoopLimit(); limit > 0) {
+      std::printf("dispatches: one per sample (the driver ends an invocation's loops after %u turns)\n", limit);
+    }
+  }
   std::printf("max depth: %d\n", scene.render.maxDepth);
   if (!args.explain) { // --explain printed the same lines above
     for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
@@ -471,9 +479,9 @@ int runInfo(const DeviceFlags& flags) {
                 VK_API_VERSION_PATCH(d.apiVersion));
     std::printf("  shaderFloat64: %s (float64 reference kernel)\n", d.shaderFloat64 ? "yes" : "no");
     std::printf("  timestamps: %s (GPU trace time)\n", d.timestamps ? "yes" : "no");
-    std::printf("  subgroups: %u lanes; basic, arithmetic and ballot in compute shaders: %s\n", d.subgroupSize,
+    std::printf("  subgroups: %u lanes; basic, arithmetic, ballot and shuffle in compute shaders: %s\n", d.subgroupSize,
                 d.subgroupMissing.empty()
-                    ? "yes (the BVH walk's lockstep, the ray counters)"
+                    ? "yes (the BVH walk's lockstep, the ray counters, lanes sharing a pixel)"
                     : ("no, lacks " + d.subgroupMissing + " (vkray cannot use this device)").c_str());
     std::printf("  maxStorageBufferRange: %llu MiB (largest sphere, plane, polygon or material array)\n",
                 static_cast<unsigned long long>(d.maxStorageBufferRange >> 20));

@@ -8,9 +8,11 @@
 
 namespace vkray {
 
-BandSizer::BandSizer(std::uint32_t width, std::uint32_t height, std::uint32_t windowRows, double budgetMs)
+BandSizer::BandSizer(std::uint32_t width, std::uint32_t height, std::uint32_t windowRows, double budgetMs,
+                     std::uint32_t samplesPerPixel)
     : windowRows_(windowRows), budgetMs_(budgetMs) {
-  firstRows_ = std::min<std::uint32_t>(height, std::max<std::uint32_t>(8, (65536 / std::max(1u, width) + 7) / 8 * 8));
+  const std::uint64_t perRow = static_cast<std::uint64_t>(std::max(1u, width)) * std::max(1u, samplesPerPixel);
+  firstRows_ = std::min<std::uint32_t>(height, std::max<std::uint32_t>(8, (65536 / perRow + 7) / 8 * 8));
 }
 
 std::uint32_t BandSizer::rowsAt(std::uint32_t y, std::uint32_t end) const {
@@ -23,8 +25,9 @@ std::uint32_t BandSizer::rowsAt(std::uint32_t y, std::uint32_t end) const {
   return std::min({rows, windowRows_, end - y});
 }
 
-void BandSizer::measured(std::uint32_t rows, double gpuMs) {
-  rowsPerMs_ = static_cast<double>(rows) / std::max(gpuMs, 1e-3);
+void BandSizer::measured(std::uint32_t tracedRows, double gpuMs) {
+  if (tracedRows == 0) return;
+  rowsPerMs_ = static_cast<double>(tracedRows) / std::max(gpuMs, 1e-3);
 }
 
 GpuTimer::GpuTimer(const vulkan::Context& context) : context_(context) {

@@ -20,13 +20,16 @@
 
 namespace vkray {
 
-// Rows per band: about 64 K pixels for the first, then as many rows as the measured speed fits in
-// the budget; always whole workgroup rows (8), never more than the image window holds.
+// Rows per band: about 64 K samples for the first, then as many rows as the measured speed fits in
+// the budget; always whole workgroup rows (8), never more than the image window holds. The speed
+// is that of the rows traced: rows that row culling filled cost next to nothing and say nothing of
+// the rest (a sky band taken for the speed of the scene below it made one band of all the rest).
 class BandSizer {
 public:
-  BandSizer(std::uint32_t width, std::uint32_t height, std::uint32_t windowRows, double budgetMs);
+  BandSizer(std::uint32_t width, std::uint32_t height, std::uint32_t windowRows, double budgetMs,
+            std::uint32_t samplesPerPixel = 1);
   std::uint32_t rowsAt(std::uint32_t y, std::uint32_t end) const; // the band from row y, before row `end`
-  void measured(std::uint32_t rows, double gpuMs);
+  void measured(std::uint32_t tracedRows, double gpuMs);          // 0 traced rows: nothing learnt
 
 private:
   std::uint32_t windowRows_;

@@ -57,6 +57,11 @@ struct RenderOptions {
   // Forward tracing: at most this many photons per light in one batch (0: as many as the band budget
   // allows). The sums do not depend on the split; tests use it to split the same photons on any device.
   std::uint64_t maxBatchPhotons = 0;
+  // The simplest schedule: every dispatch takes one sample of each pixel, one invocation per pixel,
+  // as a driver that cuts loops short needs (Context::loopLimit), where the renderer would give a
+  // dispatch all of a pixel's samples and let lanes share a pixel. The image is the same bit for
+  // bit; tests compare the two.
+  bool oneSamplePerDispatch = false;
   // Rows of workgroups whose every eye ray provably meets nothing are filled with the background
   // instead of traced (render/row_culling.h; the image is the same). Off: --no-row-culling.
   bool cullRows = true;

@@ -2,6 +2,7 @@
 #include "render/renderer.h"
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <numeric>
@@ -190,7 +191,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
 
   ProgressMeter meter(options, static_cast<double>(rowEnd - rowBegin) * (adaptive ? 2.0 : 1.0));
   auto advanced = [&](std::uint32_t rows) { meter.advance(rows, result.stats.total()); };
-  BandSizer sizer(settings.width, settings.height, imageRows_, options.bandBudgetMs);
+  BandSizer sizer(settings.width, settings.height, imageRows_, options.bandBudgetMs,
+                  static_cast<std::uint32_t>(std::max(1, settings.spp)));
   traceBands(false, baseBegin, baseEnd, settings, options, nullptr, sizer, result, advanced);
   if (adaptive) {
     // The refine pass reads a copy of the base image: rows refined by the band above do not change
@@ -253,7 +255,24 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       std::size_t n = std::clamp<std::size_t>(static_cast<std::size_t>(want), 4096, capacity);
       n = std::min(n, open.size() - first);
       list.resize(n);
-      spreadGroups(n, gpu::kWorkgroupSizeX * gpu::kWorkgroupSizeY, order);
+      // Lanes of a subgroup share each listed pixel and trace its samples side by side
+      // (trace.comp, listPass): late passes list scattered pixels, and a SIMD batch of one pixel's
+      // samples walks nearly equal rays where eight pixels' rays diverge. Each lane still traces
+      // at least eight samples, so that its fixed cost is spread (lanes pay on glass and textures,
+      // and cost a little on cheap scenes: docs/progressive.md, "Lanes share a pixel"). Where the driver lets loops run
+      // to their end, one dispatch takes the whole pass. Elsewhere a lane takes `perLane` samples per dispatch, as
+      // recordDispatch takes one per dispatch (Mesa 22's loop limit applies per dispatch), more for short lists: a
+      // dispatch of a few workgroups is mostly launch overhead, so the last passes, over a few hundred pixels with
+      // hundreds of samples each, take several samples per lane (a tree that still meets Mesa 22's limit is counted as
+      // truncated). The image does not depend on the split.
+      constexpr std::uint32_t group = gpu::kWorkgroupSizeX * gpu::kWorkgroupSizeY;
+      const std::uint32_t subgroup = std::min(std::bit_floor(std::max(1u, context_.info().subgroupSize)), group);
+      const std::uint32_t lanes =
+          options.oneSamplePerDispatch ? 1u : std::min(subgroup, std::bit_floor(std::max(1u, k / 8)));
+      const std::uint32_t perLane =
+          std::bit_floor(static_cast<std::uint32_t>(std::clamp<std::size_t>(16384 / n, 1, 16)));
+      const std::uint32_t perDispatch = options.oneSamplePerDispatch ? 1u : samplesTogether_ ? k : perLane * lanes;
+      spreadGroups(n, group / lanes, order);
       for (std::size_t j = 0; j < n; ++j) {
         std::uint32_t i = open[first + order[j]];
         list[j] = glm::vec4(static_cast<float>(i % width), static_cast<float>(i / width), 0.0f, 0.0f);
@@ -263,17 +282,12 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       gpu::PushConstants push{};
       push.pass = gpu::kPassList;
       push.tileSize = glm::uvec2(static_cast<std::uint32_t>(n), 1);
+      push.param = lanes;
       BandTimes t =
           submitBand(context_, timer_, "sampling", 0, settings.height, [&](const vk::raii::CommandBuffer& cmd) {
             cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
             cmd.bindPipeline(vk::PipelineBindPoint::eCompute, kernels_.sample->handle());
             timer_.start(cmd);
-            // One dispatch per sample, as recordDispatch (Mesa 22's loop limit applies per dispatch),
-            // except for short lists: a dispatch of a few workgroups is mostly launch overhead, so the
-            // last passes, over a few hundred pixels with hundreds of samples each, take several
-            // samples per dispatch (a tree that still meets Mesa 22's limit is counted as truncated).
-            constexpr std::uint32_t group = gpu::kWorkgroupSizeX * gpu::kWorkgroupSizeY;
-            const auto perDispatch = static_cast<std::uint32_t>(std::clamp<std::size_t>(16384 / n, 1, 16));
             for (std::uint32_t s = 0; s < k; s += perDispatch) {
               gpu::PushConstants one = push;
               one.sampleBase = samples + s;
@@ -286,7 +300,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
                                     vk::PipelineStageFlagBits::eComputeShader, {}, sumsBarrier, {}, {});
               }
               cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, one);
-              cmd.dispatch(static_cast<std::uint32_t>((n + group - 1) / group), 1, 1);
+              cmd.dispatch(static_cast<std::uint32_t>((n * lanes + group - 1) / group), 1, 1);
             }
             timer_.stop(cmd);
           });
@@ -408,7 +422,7 @@ void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, c
     ++result.timings.bands;
     // Without countStats only `truncated` is counted; the other counters stay 0.
     result.stats += readStatsAndReset();
-    sizer.measured(rows, t.gpuMs);
+    sizer.measured(rows - culled, t.gpuMs);
 
     auto readStart = Clock::now();
     if (options.kernel == Kernel::Hits)
@@ -497,6 +511,10 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
                                         std::to_string(rowBytes * 8 >> 20) + " MiB per band of 8 rows, more than " +
                                         context_.info().name + " reads from one texel buffer (maxTexelBufferElements)");
   }
+  // The driver is asked once per device (a one-invocation kernel), and only by a render that takes
+  // more than one sample of a pixel.
+  const bool manySamples = settings.spp > 1 || progressiveRender(settings, options) || options.progressive;
+  samplesTogether_ = manySamples && !options.oneSamplePerDispatch && context_.loopLimit() == 0;
   auto rows = static_cast<std::uint32_t>(std::min<std::uint64_t>(rowsFit, settings.height));
   // A progressive render lists its open pixels in the pass input (the refine pass's buffer).
   ensureImageWindow(settings.width, rows, pixelTexels, adaptive || progressiveRender(settings, options),
@@ -672,16 +690,20 @@ std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const
     cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {},
                         written, {}, {});
   }
-  // One dispatch per sample, each adding to the sums of the one before. llvmpipe (lavapipe) stops
-  // every loop of an invocation once the loops of its SIMD group have run 65535 iterations in all
-  // (LP_MAX_TGSI_LOOP_ITERATIONS, shared by all loops of a shader): 64 samples of a deep glass tree
-  // in one invocation reach that and lose their last samples without a trace. A dispatch per
-  // sample gives each sample the whole budget; the sums are added in the same order as the
-  // shader's own sample loop, so the image is bit for bit the same.
-  std::uint32_t dispatches = std::max(1u, push.sampleCount);
+  // Where the driver cuts loops short, one dispatch per sample, each adding to the sums of the one
+  // before. Mesa 22's llvmpipe stops every loop of an invocation once the loops of its SIMD group
+  // have run 65535 iterations in all (LP_MAX_TGSI_LOOP_ITERATIONS, shared by all loops of a
+  // shader): 64 samples of a deep glass tree in one invocation reach that and lose their last
+  // samples without a trace. A dispatch per sample gives each sample the whole budget. Elsewhere
+  // (samplesTogether_) one dispatch takes them all: each invocation's fixed cost (the scene's
+  // registers, its sums, its counters' subgroup sums and atomics) is paid once per pixel, not once
+  // per sample, which halves a 32-spp render of seed.json on Mesa 25. The sums are added in the
+  // same order either way, so the image is bit for bit the same.
+  const bool split = push.sampleCount > 1 && !samplesTogether_;
+  std::uint32_t dispatches = split ? push.sampleCount : 1u;
   for (std::uint32_t k = 0; k < dispatches; ++k) {
     gpu::PushConstants one = push;
-    if (push.sampleCount > 1) {
+    if (split) {
       one.sampleBase = push.sampleBase + k;
       one.sampleCount = 1;
       if (k > 0) {

@@ -70,6 +70,10 @@ public:
   // progressive, prepare() builds both): the viewer counts a sample of its frames, since counting
   // costs 10-20 %.
   void prepare(const Camera& camera, const RenderSettings& settings, const RenderOptions& options);
+  // Whether the last prepare() let one dispatch take all of a pixel's samples (see samplesTogether_),
+  // and the driver's loop cut that otherwise splits them (Context::loopLimit; 0: none).
+  bool samplesTogether() const { return samplesTogether_; }
+  std::uint32_t driverLoopLimit() const { return context_.loopLimit(); }
   void recordSamples(const vk::raii::CommandBuffer& cmd, std::uint32_t sampleBase, std::uint32_t count, bool accumulate,
                      bool countRays = true);
   vk::Buffer imageBuffer() const;        // vec4(sum rgb, samples) per pixel, row-major
@@ -116,6 +120,9 @@ private:
   RayStats readStatsAndReset();
 
   const vulkan::Context& context_;
+  // A dispatch takes all of a pixel's samples in a band (or pass) instead of one sample each: the
+  // driver lets loops run to their end (Context::loopLimit). Set by prepare().
+  bool samplesTogether_ = false;
 
   // Layouts first: the pipelines and descriptor set built from them are declared (and destroyed) after.
   vk::raii::DescriptorSetLayout setLayout_{nullptr};

@@ -81,7 +81,10 @@ std::string missingSubgroupSupport(const vk::PhysicalDeviceSubgroupProperties& p
   if (!(properties.supportedStages & vk::ShaderStageFlagBits::eCompute)) return "subgroups in compute shaders";
   using Op = vk::SubgroupFeatureFlagBits;
   std::string missing;
-  for (auto [op, name] : {std::pair{Op::eBasic, "basic"}, {Op::eArithmetic, "arithmetic"}, {Op::eBallot, "ballot"}}) {
+  for (auto [op, name] : {std::pair{Op::eBasic, "basic"},
+                          {Op::eArithmetic, "arithmetic"},
+                          {Op::eBallot, "ballot"},
+                          {Op::eShuffle, "shuffle"}}) {
     if (!(properties.supportedOperations & op)) missing += (missing.empty() ? "" : ", ") + std::string(name);
   }
   return missing;

@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -54,8 +55,9 @@ struct DeviceInfo {
   std::string subgroupMissing;
 };
 
-// The kernels vote and count across a subgroup (the BVH walk's lockstep ballots, the ray counters'
-// sums): they need basic, arithmetic and ballot operations in compute shaders. Names what is
+// The kernels vote, count and pass values across a subgroup (the BVH walk's lockstep ballots, the
+// ray counters' sums, the lanes that share a pixel in a progressive pass): they need basic,
+// arithmetic, ballot and shuffle operations in compute shaders. Names what is
 // missing ("ballot, arithmetic"), or "" when nothing is.
 std::string missingSubgroupSupport(const vk::PhysicalDeviceSubgroupProperties& properties);
 
@@ -101,6 +103,12 @@ public:
   // device throws DeviceLostError.
   void submitAndWait(std::string_view step, const std::function<void(const vk::raii::CommandBuffer&)>& record) const;
 
+  // How many turns the loops of an invocation may run in all before the driver ends them (Mesa 22's
+  // llvmpipe: 65535 per SIMD group), or 0 where loops run to their end (Mesa 25, GPUs). Measured
+  // on first use by a one-invocation kernel (vk/loop_limit.cpp), then kept: the renderer gives a
+  // dispatch several samples per invocation only where nothing cuts them short.
+  std::uint32_t loopLimit() const;
+
   std::size_t validationMessageCount() const { return log_->count(); }
   std::vector<std::string> validationMessages() const { return log_->messages(); }
   ValidationLog& validationLog() const { return *log_; }
@@ -126,6 +134,8 @@ private:
   bool hostImport_ = false;
   double timestampPeriodNs_ = 1.0;
   std::uint32_t timestampValidBits_ = 0;
+  mutable std::mutex loopLimitMutex_;
+  mutable std::optional<std::uint32_t> loopLimit_;
 };
 
 // Runs f and turns a Vulkan failure into a DeviceError naming the step ("uploading the scene: ...").
