@@ -257,18 +257,20 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       list.resize(n);
       // Lanes of a subgroup share each listed pixel and trace its samples side by side
       // (trace.comp, listPass): late passes list scattered pixels, and a SIMD batch of one pixel's
-      // samples walks nearly equal rays where eight pixels' rays diverge. Each lane still traces
-      // at least eight samples, so that its fixed cost is spread (lanes pay on glass and textures,
-      // and cost a little on cheap scenes: docs/progressive.md, "Lanes share a pixel"). Where the driver lets loops run
-      // to their end, one dispatch takes the whole pass. Elsewhere a lane takes `perLane` samples per dispatch, as
-      // recordDispatch takes one per dispatch (Mesa 22's loop limit applies per dispatch), more for short lists: a
-      // dispatch of a few workgroups is mostly launch overhead, so the last passes, over a few hundred pixels with
-      // hundreds of samples each, take several samples per lane (a tree that still meets Mesa 22's limit is counted as
-      // truncated). The image does not depend on the split.
+      // samples walks nearly equal rays where eight pixels' rays diverge. Each lane still traces at
+      // least eight samples, so that its fixed cost is spread. Lanes pay in glass trees and over
+      // textures; on cheap scenes their shuffles cost more than they save (docs/progressive.md,
+      // "Lanes share a pixel"). Where the driver lets loops run to their end, one dispatch takes
+      // the whole pass. Elsewhere a lane takes `perLane` samples per dispatch, as recordDispatch
+      // takes one (Mesa 22's loop limit applies per dispatch), more for short lists: a dispatch of
+      // a few workgroups is mostly launch overhead, so the last passes, over a few hundred pixels
+      // with hundreds of samples each, take several samples per lane (a tree that still meets
+      // Mesa 22's limit is counted as truncated). The image does not depend on the split.
       constexpr std::uint32_t group = gpu::kWorkgroupSizeX * gpu::kWorkgroupSizeY;
       const std::uint32_t subgroup = std::min(std::bit_floor(std::max(1u, context_.info().subgroupSize)), group);
+      const bool divergent = current_.refraction || current_.textures;
       const std::uint32_t lanes =
-          options.oneSamplePerDispatch ? 1u : std::min(subgroup, std::bit_floor(std::max(1u, k / 8)));
+          options.oneSamplePerDispatch || !divergent ? 1u : std::min(subgroup, std::bit_floor(std::max(1u, k / 8)));
       const std::uint32_t perLane =
           std::bit_floor(static_cast<std::uint32_t>(std::clamp<std::size_t>(16384 / n, 1, 16)));
       const std::uint32_t perDispatch = options.oneSamplePerDispatch ? 1u : samplesTogether_ ? k : perLane * lanes;
