@@ -699,8 +699,9 @@ std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const
   // samples without a trace. A dispatch per sample gives each sample the whole budget. Elsewhere
   // (samplesTogether_) one dispatch takes them all: each invocation's fixed cost (the scene's
   // registers, its sums, its counters' subgroup sums and atomics) is paid once per pixel, not once
-  // per sample, which halves a 32-spp render of seed.json on Mesa 25. The sums are added in the
-  // same order either way, so the image is bit for bit the same.
+  // per sample: a 16-spp render of seed.json takes 0.6 of the time on Mesa 25 (docs/performance.md,
+  // "Samples together"). The sums are added in the same order either way, so the image is bit for
+  // bit the same.
   const bool split = push.sampleCount > 1 && !samplesTogether_;
   std::uint32_t dispatches = split ? push.sampleCount : 1u;
   for (std::uint32_t k = 0; k < dispatches; ++k) {
