@@ -23,12 +23,12 @@ static_assert(sizeof(BvhWideNode) == 64 && offsetof(BvhWideNode, ref1) == 28 && 
 static_assert(sizeof(TextureRef) == kTextureRefTexels * 16 && sizeof(TextureLevel) == 16 && sizeof(UvInfo) == 16);
 static_assert(kUvRecordInfo == 3 && kUvRecordColors == kUvRecordTexels, "a uv record: 3 corners, UvInfo, colours");
 static_assert(sizeof(TileEntryPoints) == 32 && kEntryStackSlots == 6, "stack words 0..3, then 4, 5, start, height");
-static_assert(sizeof(FrameParams) == 11 * 16);
+static_assert(sizeof(FrameParams) == 15 * 16);
 static_assert(offsetof(FrameParams, bailout) == 112 && offsetof(FrameParams, adaptiveThreshold) == 116);
 static_assert(offsetof(FrameParams, imageSize) == 128 && offsetof(FrameParams, maxDepth) == 140);
 static_assert(offsetof(FrameParams, sphereCount) == 144 && offsetof(FrameParams, polygonCount) == 156);
 static_assert(offsetof(FrameParams, lightCount) == 160 && offsetof(FrameParams, occluderPlaneCount) == 168);
-static_assert(offsetof(FrameParams, bvhRoot) == 172);
+static_assert(offsetof(FrameParams, bvhRoot) == 172 && offsetof(FrameParams, triangleBoundsMin) == 176);
 static_assert(sizeof(RayStats) == 48);
 static_assert(sizeof(SceneUbo) <= 65536, "the packed scene must fit the smallest maxUniformBufferRange");
 static_assert(sizeof(PushConstants) == 48 && offsetof(PushConstants, pass) == 16 &&

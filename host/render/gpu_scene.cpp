@@ -287,7 +287,12 @@ GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, c
   }
 
   const std::vector<BvhPrimitive> prims = bvhPrimitives(scene, g);
-  for (const BvhPrimitive& p : prims) g.bounds.grow(p.bounds);
+  for (const BvhPrimitive& p : prims) {
+    g.bounds.grow(p.bounds);
+    const std::uint32_t kind = p.ref >> gpu::kPrimKindShift;
+    if (kind == gpu::kPrimTriangle) g.triangleBounds.grow(p.bounds);
+    if (kind == gpu::kPrimPolygon) g.polygonBounds.grow(p.bounds);
+  }
   if (withBvh) {
     auto start = std::chrono::steady_clock::now();
     g.bvh = buildBvh(prims, bvhOptions);

@@ -39,6 +39,9 @@ struct GpuScene {
   // (the union of bvhPrimitives' boxes); empty when there are none. Eye-ray culling uses it
   // (render/row_culling.h).
   Aabb bounds;
+  // The same for the triangles alone and the polygons alone: without a BVH, a ray that misses one
+  // skips that kind's loop (FrameParams::triangleBoundsMin ...).
+  Aabb triangleBounds, polygonBounds;
   Bvh bvh; // empty unless asked for
   // The BVH in the shader's layout (wideBvh) and its root reference.
   std::vector<gpu::BvhWideNode> bvhNodes;

@@ -660,6 +660,10 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.lightCount = static_cast<std::uint32_t>(g.lights.size());
   p.occluderPlaneCount = g.occluderPlanes;
   p.bvhRoot = g.bvhRoot;
+  p.triangleBoundsMin = glm::vec4(g.triangleBounds.min, 0.0f);
+  p.triangleBoundsMax = glm::vec4(g.triangleBounds.max, 0.0f);
+  p.polygonBoundsMin = glm::vec4(g.polygonBounds.min, 0.0f);
+  p.polygonBoundsMax = glm::vec4(g.polygonBounds.max, 0.0f);
   frameBuffer_->write(&p, sizeof p);
   frameWidth_ = s.width;
   frameHeight_ = s.height;

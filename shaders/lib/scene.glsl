@@ -47,8 +47,11 @@ Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay)
         if (++i >= spheres) break;
       }
     }
+    // Triangles and polygons: one box around each kind first (FrameParams), since their tests read
+    // vertices and shear them; a ray that misses the box, or meets it beyond the closest hit so far,
+    // cannot hit one. The boxes are exact and the slab test conservative (boxEntry), as for the BVH.
     uint triangles = HAS_TRIANGLES ? triangleCount() : 0u;
-    if (triangles > 0u) {
+    if (triangles > 0u && !isinf(boxEntry(r, frame.triangleBoundsMin.xyz, frame.triangleBoundsMax.xyz, hit.t))) {
       uint i = 0u;
       while (true) {
         testPrimitive(r, kPrimTriangle, i, hit);
@@ -57,7 +60,7 @@ Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay)
       }
     }
     uint polygons = HAS_POLYGONS ? polygonCount() : 0u;
-    if (polygons > 0u) {
+    if (polygons > 0u && !isinf(boxEntry(r, frame.polygonBoundsMin.xyz, frame.polygonBoundsMax.xyz, hit.t))) {
       uint i = 0u;
       while (true) {
         testPrimitive(r, kPrimPolygon, i, hit);

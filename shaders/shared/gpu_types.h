@@ -433,6 +433,12 @@ struct FrameParams {
   uint unused1;
   uint occluderPlaneCount; // planes that can cast shadows (first in Planes[])
   uint bvhRoot;            // the BVH root's reference (BvhWideNode)
+  // Without a BVH: boxes around all triangles and around all polygons (xyz; exact, from the float
+  // vertices, as the BVH's leaf boxes). A ray that misses one skips that kind's whole loop.
+  vec4 triangleBoundsMin;
+  vec4 triangleBoundsMax;
+  vec4 polygonBoundsMin;
+  vec4 polygonBoundsMax;
 };
 
 // ---- Ray counters --------------------------------------------------------------------------------
