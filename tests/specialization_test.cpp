@@ -1,8 +1,11 @@
 // "Simulate only the effects a scene calls for": scene analysis, exact ray counts, the bailout and
 // its error bound, and proof that specialization never changes a pixel.
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <thread>
 
 #include <gtest/gtest.h>
 
@@ -10,6 +13,7 @@
 #include "scene/scene_loader.h"
 #include "test_support.h"
 #include "vk/compute_pipeline.h"
+#include "vk/fold_cache.h"
 #include "vk/spirv_fold.h"
 
 namespace vkray::test {
@@ -262,6 +266,100 @@ TEST(SpirvFolding, ABrokenModuleIsReportedNotFolded) {
   vulkan::FoldedSpirv folded = vulkan::foldSpecialization(junk, spec);
   EXPECT_TRUE(folded.code.empty());
   EXPECT_FALSE(folded.error.empty());
+}
+
+// Folded modules kept on disk (vk/fold_cache.h): what is stored comes back word for word under its
+// key and under no other; a file that does not check out (a byte changed, cut short, a stray
+// extra byte) is a miss, never a module handed to the driver; the key covers every constant; and
+// only the most recently used files are kept.
+TEST(SpirvFolding, KeptModulesComeBackAsStoredAndDamagedOnesAreMissed) {
+  namespace fs = std::filesystem;
+  const fs::path dir = freshScratchDir("fold-cache") / "folded";
+  vulkan::FoldCache cache(dir, 2);
+  std::vector<std::uint32_t> module{0x07230203u, 0x00010300u, 7u, 42u, 0u, 0x00020011u, 1u};
+  vulkan::Specialization spec;
+  spec.set(3u, 1u);
+  const std::uint64_t key = vulkan::FoldCache::key(module, spec);
+  EXPECT_TRUE(cache.load(key).empty()) << "nothing stored yet";
+  cache.store(key, module);
+  EXPECT_EQ(cache.load(key), module);
+  EXPECT_TRUE(cache.load(key + 1).empty());
+
+  vulkan::Specialization other = spec;
+  other.set(3u, 0u);
+  EXPECT_NE(vulkan::FoldCache::key(module, other), key);
+  other = spec;
+  other.set(4u, 0u);
+  EXPECT_NE(vulkan::FoldCache::key(module, other), key);
+  std::vector<std::uint32_t> changed = module;
+  changed[3] = 43u;
+  EXPECT_NE(vulkan::FoldCache::key(changed, spec), key);
+
+  const fs::path file = cache.fileFor(key);
+  const std::string good = slurp(file);
+  auto rewrite = [&](const std::string& bytes) {
+    std::ofstream(file, std::ios::binary | std::ios::trunc)
+        .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+  };
+  std::string flipped = good;
+  flipped[flipped.size() - 2] ^= 0x10;
+  rewrite(flipped);
+  EXPECT_TRUE(cache.load(key).empty()) << "a changed byte";
+  rewrite(good.substr(0, good.size() - 4));
+  EXPECT_TRUE(cache.load(key).empty()) << "cut short";
+  rewrite(good + "x");
+  EXPECT_TRUE(cache.load(key).empty()) << "a stray byte";
+  rewrite("");
+  EXPECT_TRUE(cache.load(key).empty()) << "empty";
+  rewrite(good);
+  EXPECT_EQ(cache.load(key), module);
+
+  // Two more modules with room for two: the least recently used (the first) goes.
+  // (Pauses: distinct modification times, as the file system's clock may be coarser than the
+  // one the load above marked its file with.)
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  cache.store(key + 1, module);
+  std::this_thread::sleep_for(std::chrono::milliseconds(30));
+  cache.store(key + 2, module);
+  EXPECT_FALSE(fs::exists(cache.fileFor(key)));
+  EXPECT_EQ(cache.load(key + 1), module);
+  EXPECT_EQ(cache.load(key + 2), module);
+
+  // Without a directory nothing is kept or found.
+  vulkan::FoldCache off{fs::path()};
+  off.store(key, module);
+  EXPECT_TRUE(off.load(key).empty());
+  fs::remove_all(dir.parent_path());
+}
+
+// A render whose folded module comes from an earlier run's cache builds the same kernel: the second
+// renderer, given a pipeline cache in the same directory, reads the module back instead of folding
+// it, and its image and ray counts are those of the first.
+TEST(RenderSpecialization, AFoldedModuleKeptOnDiskGivesTheSamePixels) {
+  const std::filesystem::path dir = freshScratchDir("fold-kept");
+  Scene s = smallBundledScene(std::filesystem::path(VKRAY_SOURCE_DIR "/scenes") / "glass.json");
+  auto renderWithCache = [&](PipelineBuild& trace) {
+    vulkan::PipelineCache cache(gpu(), dir / "pipelines.bin");
+    Renderer own(gpu(), &cache);
+    own.setScene(s);
+    RenderResult r = own.render(s.camera, s.render, RenderOptions{});
+    expectNoValidationMessages();
+    for (const PipelineBuild& p : r.timings.pipelinesBuilt) {
+      if (p.name == "trace") trace = p;
+    }
+    return r;
+  };
+  PipelineBuild first, second;
+  RenderResult a = renderWithCache(first);
+  RenderResult b = renderWithCache(second);
+  ASSERT_EQ(first.name, "trace");
+  ASSERT_EQ(second.name, "trace");
+  EXPECT_FALSE(first.foldKept);
+  EXPECT_TRUE(second.foldKept);
+  EXPECT_EQ(first.spirvBytes, second.spirvBytes);
+  EXPECT_EQ(a.image.pixels, b.image.pixels);
+  EXPECT_EQ(a.stats.total(), b.stats.total());
+  std::filesystem::remove_all(dir);
 }
 
 // Storage-buffer and uniform-buffer scene layouts read the same values.

@@ -159,7 +159,8 @@ KernelSet KernelLibrary::realize(const KernelPlan& plan) {
   auto start = std::chrono::steady_clock::now();
   auto build = [&](const Job& job) {
     return std::make_unique<vulkan::ComputePipeline>(context_, job.code, layout_, job.spec,
-                                                     cache_ ? &cache_->cache() : nullptr, job.name, job.folding);
+                                                     cache_ ? &cache_->cache() : nullptr, job.name, job.folding,
+                                                     cache_ ? &cache_->foldCache() : nullptr);
   };
   // vkCreateComputePipelines may run on several threads at once, with one pipeline cache
   // (VkPipelineCache is internally synchronized); the first job runs on this thread.
@@ -185,7 +186,7 @@ KernelSet KernelLibrary::realize(const KernelPlan& plan) {
     set.buildMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     for (const Job& job : jobs) {
       const vulkan::ComputePipeline& p = **job.slot;
-      set.built.push_back(PipelineBuild{job.name, p.creationMs(), p.foldMs(), p.spirvBytes()});
+      set.built.push_back(PipelineBuild{job.name, p.creationMs(), p.foldMs(), p.spirvBytes(), 0.0, p.foldKept()});
       set.builtPipelines.push_back(&p);
     }
     if (cache_) cache_->save();

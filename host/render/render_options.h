@@ -103,6 +103,7 @@ struct PipelineBuild {
   // code at a pipeline's first dispatch, not at vkCreateComputePipelines, so that is where most of
   // its compile is (or its load from Mesa's on-disk shader cache).
   double firstDispatchMs = 0.0;
+  bool foldKept = false; // the folded module was read back from an earlier run (vk/fold_cache.h)
 };
 
 struct RenderTimings {

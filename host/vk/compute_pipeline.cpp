@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "vk/context.h"
+#include "vk/fold_cache.h"
 #include "vk/spirv_fold.h"
 
 namespace vkray::vulkan {
@@ -18,11 +19,17 @@ namespace vkray::vulkan {
 ComputePipeline::ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv,
                                  vk::PipelineLayout layout, const Specialization& specialization,
                                  const vk::raii::PipelineCache* cache, const std::string& name,
-                                 SpecializationFolding folding) {
+                                 SpecializationFolding folding, const FoldCache* foldCache) {
   auto start = std::chrono::steady_clock::now();
   FoldedSpirv folded;
   if (folding == SpecializationFolding::FoldSpirv) {
-    folded = foldSpecialization(spirv, specialization);
+    const std::uint64_t key = foldCache ? FoldCache::key(spirv, specialization) : 0;
+    if (foldCache) folded.code = foldCache->load(key);
+    foldKept_ = !folded.code.empty();
+    if (!foldKept_) {
+      folded = foldSpecialization(spirv, specialization);
+      if (foldCache && !folded.code.empty()) foldCache->store(key, folded.code);
+    }
     if (folded.code.empty()) {
       // Never fatal: the driver specializes the original module the same way, only slower.
       std::fprintf(stderr, "vkray: warning: pipeline '%s' handed to the driver unfolded: %s\n", name.c_str(),
@@ -61,7 +68,9 @@ std::vector<char> readAll(const std::filesystem::path& file) {
 } // namespace
 
 PipelineCache::PipelineCache(const Context& context, std::filesystem::path file)
-    : context_(&context), file_(std::move(file)) {
+    : context_(&context), file_(std::move(file)),
+      foldCache_(
+          std::make_unique<FoldCache>(file_.empty() ? std::filesystem::path() : file_.parent_path() / "folded")) {
   std::vector<char> data;
   if (!file_.empty()) data = readAll(file_);
   // The driver checks the header (vendor, device, cache UUID) and ignores data from another driver.

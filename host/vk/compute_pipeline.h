@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <map>
+#include <memory>
 #include <span>
 #include <string>
 
@@ -14,6 +15,7 @@
 namespace vkray::vulkan {
 
 class Context;
+class FoldCache;
 
 // Specialization constants by id; every value is 32 bits (VkBool32, int, uint or float).
 class Specialization {
@@ -36,19 +38,23 @@ enum class SpecializationFolding { DriverOnly, FoldSpirv };
 
 class ComputePipeline {
 public:
-  // cache may be null.
+  // cache and foldCache may be null; with a foldCache a folded module is looked up there first
+  // and kept there after folding.
   ComputePipeline(const Context& context, std::span<const std::uint32_t> spirv, vk::PipelineLayout layout,
                   const Specialization& specialization, const vk::raii::PipelineCache* cache, const std::string& name,
-                  SpecializationFolding folding = SpecializationFolding::DriverOnly);
+                  SpecializationFolding folding = SpecializationFolding::DriverOnly,
+                  const FoldCache* foldCache = nullptr);
   vk::Pipeline handle() const { return *pipeline_; }
-  double creationMs() const { return creationMs_; } // folding included
-  double foldMs() const { return foldMs_; }
+  double creationMs() const { return creationMs_; }      // folding included
+  double foldMs() const { return foldMs_; }              // folding, or reading the folded module back
+  bool foldKept() const { return foldKept_; }            // the folded module came from the FoldCache
   std::size_t spirvBytes() const { return spirvBytes_; } // what the driver was given
 
 private:
   vk::raii::Pipeline pipeline_{nullptr};
   double creationMs_ = 0.0;
   double foldMs_ = 0.0;
+  bool foldKept_ = false;
   std::size_t spirvBytes_ = 0;
 };
 
@@ -75,11 +81,16 @@ public:
   // $VKRAY_CACHE_DIR, else $XDG_CACHE_HOME/vkray, else ~/.cache/vkray; file per device + driver.
   static std::filesystem::path defaultFile(const Context& context);
 
+  // Folded SPIR-V kept beside the file, in folded/ (none when the file is empty). The module does
+  // not depend on the device, only on the build's kernels and the constants.
+  const FoldCache& foldCache() const { return *foldCache_; }
+
 private:
   const Context* context_;
   std::filesystem::path file_;
   std::size_t loadedBytes_ = 0;
   vk::raii::PipelineCache cache_{nullptr};
+  std::unique_ptr<FoldCache> foldCache_;
 };
 
 } // namespace vkray::vulkan

@@ -17,6 +17,10 @@ namespace vkray::vulkan {
 
 class Specialization;
 
+// Which passes foldSpecialization runs: part of the key of a folded module kept on disk
+// (vk/fold_cache.h). Raise it whenever the passes or their options change.
+inline constexpr std::uint32_t kFoldPassesVersion = 1;
+
 struct FoldedSpirv {
   std::vector<std::uint32_t> code; // empty when folding failed (then use the original)
   std::string error;               // why it failed
