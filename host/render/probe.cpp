@@ -8,23 +8,15 @@ namespace vkray {
 
 Probe::Probe(const vulkan::Context& context) : context_(context) {
   vulkan::vulkanStep("creating the probe pipeline", [&] {
-    std::array<vk::DescriptorSetLayoutBinding, 3> bindings{
-        vk::DescriptorSetLayoutBinding(gpu::kProbeBindingQueries, vk::DescriptorType::eStorageBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kProbeBindingResults, vk::DescriptorType::eStorageBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kProbeBindingVertices, vk::DescriptorType::eStorageBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute)};
-    setLayout_ = vk::raii::DescriptorSetLayout(context.device(), vk::DescriptorSetLayoutCreateInfo({}, bindings));
-    vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(std::uint32_t));
-    vk::DescriptorSetLayout layouts[] = {*setLayout_};
-    pipelineLayout_ = vk::raii::PipelineLayout(context.device(), vk::PipelineLayoutCreateInfo({}, layouts, push));
-    vk::DescriptorPoolSize size(vk::DescriptorType::eStorageBuffer, 3);
-    pool_ = vk::raii::DescriptorPool(
-        context.device(), vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, size));
+    layout_ = vulkan::KernelLayout(context,
+                                   {{gpu::kProbeBindingQueries, vk::DescriptorType::eStorageBuffer},
+                                    {gpu::kProbeBindingResults, vk::DescriptorType::eStorageBuffer},
+                                    {gpu::kProbeBindingVertices, vk::DescriptorType::eStorageBuffer}},
+                                   sizeof(std::uint32_t));
   });
-  pipeline_ = std::make_unique<vulkan::ComputePipeline>(context, std::span<const std::uint32_t>(kProbeSpv),
-                                                        *pipelineLayout_, vulkan::Specialization{}, nullptr, "probe");
+  pipeline_ =
+      std::make_unique<vulkan::ComputePipeline>(context, std::span<const std::uint32_t>(kProbeSpv),
+                                                layout_.pipelineLayout(), vulkan::Specialization{}, nullptr, "probe");
 }
 
 std::vector<gpu::ProbeResult> Probe::run(const std::vector<gpu::ProbeQuery>& queries,
@@ -40,8 +32,7 @@ std::vector<gpu::ProbeResult> Probe::run(const std::vector<gpu::ProbeQuery>& que
                MemoryUse::DeviceLocal, "probe vertices");
   verts.write(polygonVertices.data(), polygonVertices.size() * sizeof(glm::vec4));
 
-  vk::DescriptorSetLayout layouts[] = {*setLayout_};
-  vk::raii::DescriptorSets sets(context_.device(), vk::DescriptorSetAllocateInfo(*pool_, layouts));
+  vk::raii::DescriptorSets sets = layout_.allocate();
   std::array<vk::DescriptorBufferInfo, 3> infos{vk::DescriptorBufferInfo(in.handle(), 0, VK_WHOLE_SIZE),
                                                 vk::DescriptorBufferInfo(out.handle(), 0, VK_WHOLE_SIZE),
                                                 vk::DescriptorBufferInfo(verts.handle(), 0, VK_WHOLE_SIZE)};
@@ -54,8 +45,8 @@ std::vector<gpu::ProbeResult> Probe::run(const std::vector<gpu::ProbeQuery>& que
   auto count = static_cast<std::uint32_t>(queries.size());
   context_.submitAndWait("running the probe kernel", [&](const vk::raii::CommandBuffer& cmd) {
     cmd.bindPipeline(vk::PipelineBindPoint::eCompute, pipeline_->handle());
-    cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*sets.front()}, {});
-    cmd.pushConstants<std::uint32_t>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, count);
+    cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, layout_.pipelineLayout(), 0, {*sets.front()}, {});
+    cmd.pushConstants<std::uint32_t>(layout_.pipelineLayout(), vk::ShaderStageFlagBits::eCompute, 0, count);
     cmd.dispatch((count + 63) / 64, 1, 1);
     vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
                               vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);

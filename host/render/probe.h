@@ -9,6 +9,7 @@
 #include "../../shaders/shared/gpu_types.h"
 #include "vk/compute_pipeline.h"
 #include "vk/context.h"
+#include "vk/kernel_layout.h"
 
 namespace vkray {
 
@@ -21,9 +22,7 @@ public:
 
 private:
   const vulkan::Context& context_;
-  vk::raii::DescriptorSetLayout setLayout_{nullptr};
-  vk::raii::PipelineLayout pipelineLayout_{nullptr};
-  vk::raii::DescriptorPool pool_{nullptr};
+  vulkan::KernelLayout layout_;
   std::unique_ptr<vulkan::ComputePipeline> pipeline_;
 };
 

@@ -27,24 +27,13 @@ ConvergenceMeter::ConvergenceMeter(const vulkan::Context& context, vulkan::Pipel
   const auto& device = context.device();
   vulkan::vulkanStep("creating the viewer's convergence pass", [&] {
     using T = vk::DescriptorType;
-    std::array<vk::DescriptorSetLayoutBinding, 4> bindings{
-        vk::DescriptorSetLayoutBinding(gpu::kConvergenceBindingSums, T::eStorageTexelBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kConvergenceBindingHalf, T::eStorageTexelBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kConvergenceBindingErrors, T::eStorageTexelBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kConvergenceBindingHistogram, T::eStorageBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute)};
-    setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
-    vk::DescriptorSetLayout layouts[] = {*setLayout_};
-    vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(glm::uvec2));
-    pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, push));
-    std::array<vk::DescriptorPoolSize, 2> sizes{vk::DescriptorPoolSize(T::eStorageTexelBuffer, 3),
-                                                vk::DescriptorPoolSize(T::eStorageBuffer, 1)};
-    pool_ = vk::raii::DescriptorPool(
-        device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
-    vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*pool_, layouts));
+    layout_ = vulkan::KernelLayout(context,
+                                   {{gpu::kConvergenceBindingSums, T::eStorageTexelBuffer},
+                                    {gpu::kConvergenceBindingHalf, T::eStorageTexelBuffer},
+                                    {gpu::kConvergenceBindingErrors, T::eStorageTexelBuffer},
+                                    {gpu::kConvergenceBindingHistogram, T::eStorageBuffer}},
+                                   sizeof(glm::uvec2));
+    vk::raii::DescriptorSets sets = layout_.allocate();
     set_ = std::move(sets.front());
   });
   histogram_ =
@@ -66,9 +55,9 @@ void ConvergenceMeter::buildPipelines() {
     spec.set(gpu::kConvergenceSpecStep, step);
     spec.set(gpu::kConvergenceSpecGroupX, groupX_);
     spec.set(gpu::kConvergenceSpecThreshold, static_cast<float>(threshold_));
-    auto pipeline =
-        std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kConvergenceSpv),
-                                                  *pipelineLayout_, spec, cache, step == 0 ? "estimate" : "reduce");
+    auto pipeline = std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kConvergenceSpv),
+                                                              layout_.pipelineLayout(), spec, cache,
+                                                              step == 0 ? "estimate" : "reduce");
     (step == 0 ? estimate_ : reduce_) = std::move(pipeline);
   }
 }
@@ -129,8 +118,8 @@ void ConvergenceMeter::record(const vk::raii::CommandBuffer& cmd, std::uint32_t 
   }
   const glm::uvec2 size(size_.width, size_.height);
   const std::uint32_t groups = (size_.width + groupX_ - 1) / groupX_;
-  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*set_}, {});
-  cmd.pushConstants<glm::uvec2>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, size);
+  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, layout_.pipelineLayout(), 0, {*set_}, {});
+  cmd.pushConstants<glm::uvec2>(layout_.pipelineLayout(), vk::ShaderStageFlagBits::eCompute, 0, size);
   if (estimate) {
     cmd.bindPipeline(vk::PipelineBindPoint::eCompute, estimate_->handle());
     cmd.dispatch(groups, size_.height, 1);

@@ -18,6 +18,7 @@
 #include "vk/buffer.h"
 #include "vk/compute_pipeline.h"
 #include "vk/context.h"
+#include "vk/kernel_layout.h"
 
 namespace vkray {
 
@@ -61,9 +62,7 @@ private:
   const vulkan::Context& context_;
   vulkan::PipelineCache* cache_;
   // Layouts before the pipelines and the set built from them.
-  vk::raii::DescriptorSetLayout setLayout_{nullptr};
-  vk::raii::PipelineLayout pipelineLayout_{nullptr};
-  vk::raii::DescriptorPool pool_{nullptr};
+  vulkan::KernelLayout layout_;
   vk::raii::DescriptorSet set_{nullptr};
   std::unique_ptr<vulkan::ComputePipeline> estimate_;
   std::unique_ptr<vulkan::ComputePipeline> reduce_;

@@ -22,25 +22,13 @@ Presenter::Presenter(const vulkan::Context& context, vulkan::PipelineCache* cach
   const auto& device = context.device();
   vulkan::vulkanStep("creating the viewer's resolve pass", [&] {
     // The layer is read by the direct variant only.
-    std::array<vk::DescriptorSetLayoutBinding, 4> bindings{
-        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingSums, vk::DescriptorType::eStorageTexelBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingDisplay, vk::DescriptorType::eStorageImage, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingOverlay, vk::DescriptorType::eCombinedImageSampler, 1,
-                                       vk::ShaderStageFlagBits::eCompute),
-        vk::DescriptorSetLayoutBinding(gpu::kResolveBindingMap, vk::DescriptorType::eStorageBuffer, 1,
-                                       vk::ShaderStageFlagBits::eCompute)};
-    setLayout_ = vk::raii::DescriptorSetLayout(device, vk::DescriptorSetLayoutCreateInfo({}, bindings));
-    vk::DescriptorSetLayout layouts[] = {*setLayout_};
-    pipelineLayout_ = vk::raii::PipelineLayout(device, vk::PipelineLayoutCreateInfo({}, layouts, {}));
-    std::array<vk::DescriptorPoolSize, 4> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, 1),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, 1),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, 1),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, 1)};
-    pool_ = vk::raii::DescriptorPool(
-        device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, sizes));
-    vk::raii::DescriptorSets sets(device, vk::DescriptorSetAllocateInfo(*pool_, layouts));
+    layout_ = vulkan::KernelLayout(context,
+                                   {{gpu::kResolveBindingSums, vk::DescriptorType::eStorageTexelBuffer},
+                                    {gpu::kResolveBindingDisplay, vk::DescriptorType::eStorageImage},
+                                    {gpu::kResolveBindingOverlay, vk::DescriptorType::eCombinedImageSampler},
+                                    {gpu::kResolveBindingMap, vk::DescriptorType::eStorageBuffer}},
+                                   0);
+    vk::raii::DescriptorSets sets = layout_.allocate();
     set_ = std::move(sets.front());
     layerSampler_ = vk::raii::Sampler(
         device, vk::SamplerCreateInfo({}, vk::Filter::eNearest, vk::Filter::eNearest, vk::SamplerMipmapMode::eNearest,
@@ -75,10 +63,11 @@ void Presenter::buildPipelines(std::uint32_t groupX) {
   pipeline_.reset();
   directPipeline_.reset();
   pipeline_ = std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kResolveSpv),
-                                                        *pipelineLayout_, spec, cache, "resolve");
+                                                        layout_.pipelineLayout(), spec, cache, "resolve");
   if (allowDirect_) {
-    directPipeline_ = std::make_unique<vulkan::ComputePipeline>(
-        context_, std::span<const std::uint32_t>(kResolveDirectSpv), *pipelineLayout_, spec, cache, "direct resolve");
+    directPipeline_ =
+        std::make_unique<vulkan::ComputePipeline>(context_, std::span<const std::uint32_t>(kResolveDirectSpv),
+                                                  layout_.pipelineLayout(), spec, cache, "direct resolve");
   }
   groupX_ = groupX;
 }
@@ -95,14 +84,8 @@ void Presenter::attach(const Swapchain& swapchain, vk::ImageView overlayLayer) {
   const auto& device = context_.device();
   vulkan::vulkanStep("creating the viewer's direct resolve sets", [&] {
     const auto n = static_cast<std::uint32_t>(swapchain.imageCount());
-    std::array<vk::DescriptorPoolSize, 4> sizes{vk::DescriptorPoolSize(vk::DescriptorType::eStorageTexelBuffer, n),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageImage, n),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eCombinedImageSampler, n),
-                                                vk::DescriptorPoolSize(vk::DescriptorType::eStorageBuffer, n)};
-    directPool_ = vk::raii::DescriptorPool(
-        device, vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, n, sizes));
-    std::vector<vk::DescriptorSetLayout> layouts(n, *setLayout_);
-    directSets_ = vk::raii::DescriptorSets(device, vk::DescriptorSetAllocateInfo(*directPool_, layouts));
+    directPool_ = layout_.makePool(n);
+    directSets_ = layout_.allocate(directPool_, n);
     for (std::uint32_t i = 0; i < n; ++i) {
       vk::DescriptorImageInfo imageInfo(nullptr, swapchain.view(i), vk::ImageLayout::eGeneral);
       std::array<vk::WriteDescriptorSet, 2> writes{
@@ -184,7 +167,7 @@ void Presenter::recordResolve(const vk::raii::CommandBuffer& cmd, const Target& 
   cmd.pipelineBarrier(Stage::eComputeShader | Stage::eTransfer, Stage::eComputeShader, {}, {}, sumsWritten, writable);
 
   cmd.bindPipeline(vk::PipelineBindPoint::eCompute, (toSwapchain ? directPipeline_ : pipeline_)->handle());
-  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0,
+  cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, layout_.pipelineLayout(), 0,
                          {toSwapchain ? *directSets_[target.index] : *set_}, {});
   // Round up: the shader bounds-checks the partial workgroups at the edges.
   cmd.dispatch((size_.width + groupX_ - 1) / groupX_, size_.height, 1);

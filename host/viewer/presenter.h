@@ -17,6 +17,7 @@
 #include "vk/buffer.h"
 #include "vk/compute_pipeline.h"
 #include "vk/context.h"
+#include "vk/kernel_layout.h"
 
 namespace vkray {
 
@@ -71,9 +72,7 @@ public:
 private:
   const vulkan::Context& context_;
   // Layouts before what is built from them; the image's memory before the image bound to it.
-  vk::raii::DescriptorSetLayout setLayout_{nullptr};
-  vk::raii::PipelineLayout pipelineLayout_{nullptr};
-  vk::raii::DescriptorPool pool_{nullptr};
+  vulkan::KernelLayout layout_;
   vk::raii::DescriptorSet set_{nullptr};
   std::unique_ptr<vulkan::ComputePipeline> pipeline_;
   std::unique_ptr<vulkan::ComputePipeline> directPipeline_; // null where the device cannot

@@ -5,6 +5,7 @@
 #include "vk/buffer.h"
 #include "vk/compute_pipeline.h"
 #include "vk/context.h"
+#include "vk/kernel_layout.h"
 
 namespace vkray::vulkan {
 
@@ -14,32 +15,22 @@ namespace {
 constexpr std::uint32_t kTurns = 1u << 17;
 
 std::uint32_t measureLoopLimit(const Context& context) {
-  vk::raii::DescriptorSetLayout setLayout{nullptr};
-  vk::raii::PipelineLayout pipelineLayout{nullptr};
-  vk::raii::DescriptorPool pool{nullptr};
+  KernelLayout layout;
   vulkanStep("creating the loop-limit probe's layout", [&] {
-    vk::DescriptorSetLayoutBinding binding(0, vk::DescriptorType::eStorageBuffer, 1, vk::ShaderStageFlagBits::eCompute);
-    setLayout = vk::raii::DescriptorSetLayout(context.device(), vk::DescriptorSetLayoutCreateInfo({}, binding));
-    vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, sizeof(std::uint32_t));
-    vk::DescriptorSetLayout layouts[] = {*setLayout};
-    pipelineLayout = vk::raii::PipelineLayout(context.device(), vk::PipelineLayoutCreateInfo({}, layouts, push));
-    vk::DescriptorPoolSize size(vk::DescriptorType::eStorageBuffer, 1);
-    pool = vk::raii::DescriptorPool(
-        context.device(), vk::DescriptorPoolCreateInfo(vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, 1, size));
+    layout = KernelLayout(context, {{0, vk::DescriptorType::eStorageBuffer}}, sizeof(std::uint32_t));
   });
-  ComputePipeline pipeline(context, std::span<const std::uint32_t>(kLoopLimitSpv), *pipelineLayout, Specialization{},
-                           nullptr, "loop-limit probe");
+  ComputePipeline pipeline(context, std::span<const std::uint32_t>(kLoopLimitSpv), layout.pipelineLayout(),
+                           Specialization{}, nullptr, "loop-limit probe");
   Buffer result(context, 2 * sizeof(std::uint32_t), vk::BufferUsageFlagBits::eStorageBuffer, MemoryUse::DeviceLocal,
                 "loop-limit probe result");
-  vk::DescriptorSetLayout layouts[] = {*setLayout};
-  vk::raii::DescriptorSets sets(context.device(), vk::DescriptorSetAllocateInfo(*pool, layouts));
+  vk::raii::DescriptorSets sets = layout.allocate();
   vk::DescriptorBufferInfo info(result.handle(), 0, VK_WHOLE_SIZE);
   vk::WriteDescriptorSet write(*sets.front(), 0, 0, 1, vk::DescriptorType::eStorageBuffer, nullptr, &info);
   context.device().updateDescriptorSets(write, {});
   context.submitAndWait("running the loop-limit probe", [&](const vk::raii::CommandBuffer& cmd) {
     cmd.bindPipeline(vk::PipelineBindPoint::eCompute, pipeline.handle());
-    cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout, 0, {*sets.front()}, {});
-    cmd.pushConstants<std::uint32_t>(*pipelineLayout, vk::ShaderStageFlagBits::eCompute, 0, kTurns);
+    cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, layout.pipelineLayout(), 0, {*sets.front()}, {});
+    cmd.pushConstants<std::uint32_t>(layout.pipelineLayout(), vk::ShaderStageFlagBits::eCompute, 0, kTurns);
     cmd.dispatch(1, 1, 1);
     vk::MemoryBarrier barrier(vk::AccessFlagBits::eShaderWrite,
                               vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead);
