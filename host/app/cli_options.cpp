@@ -43,7 +43,8 @@ void addDeviceFlags(CLI::App& app, DeviceFlags& f) {
       ->envname("VKRAY_DEVICE");
   app.add_flag("--validate", f.validate, "enable the Khronos validation layer; any message fails the run");
   app.add_flag("--sync-validation", f.syncValidate, "also enable its synchronization validation");
-  app.add_flag("--no-pipeline-cache", f.noPipelineCache, "do not read or write the on-disk pipeline cache and folded SPIR-V");
+  app.add_flag("--no-pipeline-cache", f.noPipelineCache,
+               "do not read or write the on-disk pipeline cache and folded SPIR-V");
   app.add_flag("--no-huge-pages", f.noHugePages,
                "keep large scene buffers in the driver's memory, not in vkray's own huge pages (for comparison)");
 }
