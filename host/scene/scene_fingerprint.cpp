@@ -4,37 +4,15 @@
 #include <cstdio>
 #include <cstring>
 
+#include "util/fnv_hash.h"
+
 namespace vkray {
 
 namespace {
 
-// FNV-1a (Fowler, Noll, Vo): a change of any input byte changes the hash; not a cryptographic hash,
-// which a check that tiles come from one render does not need.
-class Hasher {
+// The scene's values into FNV-1a (util/fnv_hash.h), doubles as their bits.
+class Hasher : public Fnv1a {
 public:
-  void bytes(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    for (std::size_t i = 0; i < n; ++i) {
-      h_ ^= p[i];
-      h_ *= 0x100000001b3ull;
-    }
-  }
-  // Bulk data (texels), a 64-bit word at a time: 8 times fewer steps than bytes(). The xor-shift
-  // after each multiply carries a word's high bits down, which the multiply alone never does; each
-  // step is a bijection of the state for a fixed word and of the word for a fixed state, so inputs
-  // that differ in one word always hash apart.
-  void words(const void* data, std::size_t n) {
-    const auto* p = static_cast<const unsigned char*>(data);
-    std::size_t i = 0;
-    for (; i + 8 <= n; i += 8) {
-      std::uint64_t w;
-      std::memcpy(&w, p + i, sizeof w);
-      h_ = (h_ ^ w) * 0x100000001b3ull;
-      h_ ^= h_ >> 32;
-    }
-    bytes(p + i, n - i);
-  }
-  void u64(std::uint64_t v) { bytes(&v, sizeof v); }
   void f64(double v) {
     if (v == 0.0) v = 0.0; // -0 and +0 render alike
     std::uint64_t bits;
@@ -54,10 +32,6 @@ public:
     vec(glm::dvec3(v));
     f64(v.w);
   }
-  std::uint64_t value() const { return h_; }
-
-private:
-  std::uint64_t h_ = 0xcbf29ce484222325ull;
 };
 
 // A decoded texture: its sampling and its image. The mip levels below level 0 are built from it

@@ -12,6 +12,7 @@
 #include <spirv-tools/libspirv.h>
 #include <unistd.h>
 
+#include "util/fnv_hash.h"
 #include "vk/compute_pipeline.h"
 #include "vk/spirv_fold.h"
 
@@ -21,7 +22,7 @@ namespace {
 
 // A file: this header, then the folded module's words.
 constexpr std::uint32_t kMagic = 0x53464b56u; // "VKFS"
-constexpr std::uint32_t kFormat = 1u;
+constexpr std::uint32_t kFormat = 2u;         // 2: module hashed a word at a time
 struct Header {
   std::uint32_t magic;
   std::uint32_t format;
@@ -32,20 +33,10 @@ struct Header {
 constexpr std::uint32_t kSpirvMagic = 0x07230203u;
 constexpr std::uint64_t kMaxWords = 64ull << 20; // 256 MiB: anything larger is not one of ours
 
-// FNV-1a, 64-bit, over bytes.
-struct Fnv {
-  std::uint64_t h = 0xcbf29ce484222325ull;
-  void bytes(const void* p, std::size_t n) {
-    const auto* b = static_cast<const unsigned char*>(p);
-    for (std::size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 0x100000001b3ull;
-  }
-  void word(std::uint64_t w) { bytes(&w, sizeof w); }
-};
-
 std::uint64_t hashWords(std::span<const std::uint32_t> words) {
-  Fnv f;
-  f.bytes(words.data(), words.size_bytes());
-  return f.h;
+  Fnv1a f;
+  f.words(words.data(), words.size_bytes());
+  return f.value();
 }
 
 } // namespace
@@ -53,19 +44,19 @@ std::uint64_t hashWords(std::span<const std::uint32_t> words) {
 FoldCache::FoldCache(std::filesystem::path dir, std::size_t maxFiles) : dir_(std::move(dir)), maxFiles_(maxFiles) {}
 
 std::uint64_t FoldCache::key(std::span<const std::uint32_t> code, const Specialization& specialization) {
-  Fnv f;
-  f.word(kFormat);
-  f.word(kFoldPassesVersion);
+  Fnv1a f;
+  f.u64(kFormat);
+  f.u64(kFoldPassesVersion);
   const char* tools = spvSoftwareVersionDetailsString();
   f.bytes(tools, std::strlen(tools));
-  f.word(code.size());
-  f.bytes(code.data(), code.size_bytes());
-  f.word(specialization.values().size());
+  f.u64(code.size());
+  f.words(code.data(), code.size_bytes());
+  f.u64(specialization.values().size());
   for (const auto& [id, value] : specialization.values()) {
-    f.word(id);
-    f.word(value);
+    f.u64(id);
+    f.u64(value);
   }
-  return f.h;
+  return f.value();
 }
 
 std::filesystem::path FoldCache::fileFor(std::uint64_t key) const {
