@@ -31,7 +31,6 @@ public:
   // ignored, since a module that is not kept only costs the next run its folding.
   void store(std::uint64_t key, std::span<const std::uint32_t> folded) const;
 
-  const std::filesystem::path& dir() const { return dir_; }
   std::filesystem::path fileFor(std::uint64_t key) const;
 
 private:
