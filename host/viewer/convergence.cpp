@@ -24,7 +24,6 @@ double binLowLog2(std::uint32_t bin) {
 
 ConvergenceMeter::ConvergenceMeter(const vulkan::Context& context, vulkan::PipelineCache* cache)
     : context_(context), cache_(cache) {
-  const auto& device = context.device();
   vulkan::vulkanStep("creating the viewer's convergence pass", [&] {
     using T = vk::DescriptorType;
     layout_ = vulkan::KernelLayout(context,
