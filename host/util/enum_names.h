@@ -52,7 +52,11 @@ template <typename E> std::string enumChoices() {
   const auto& values = EnumNames<E>::values;
   for (std::size_t i = 0; i < values.size(); ++i) {
     if (i > 0) list += i + 1 == values.size() ? " or " : ", ";
-    list += "'" + std::string(values[i].name) + "'";
+    // Appended piece by piece: "'" + std::string(...) trips GCC 12's -Wstringop-overflow (a false
+    // positive in basic_string::insert at -O2).
+    list += '\'';
+    list += values[i].name;
+    list += '\'';
   }
   return list;
 }
