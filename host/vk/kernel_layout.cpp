@@ -8,7 +8,7 @@
 namespace vkray::vulkan {
 
 KernelLayout::KernelLayout(const Context& context, std::initializer_list<KernelBinding> bindings,
-                           std::uint32_t pushBytes, std::uint32_t sets)
+                           std::uint32_t pushBytes)
     : context_(&context) {
   std::vector<vk::DescriptorSetLayoutBinding> layoutBindings;
   for (const KernelBinding& b : bindings) {
@@ -28,7 +28,7 @@ KernelLayout::KernelLayout(const Context& context, std::initializer_list<KernelB
   vk::PushConstantRange push(vk::ShaderStageFlagBits::eCompute, 0, pushBytes);
   pipelineLayout_ = vk::raii::PipelineLayout(device, pushBytes > 0 ? vk::PipelineLayoutCreateInfo({}, layouts, push)
                                                                    : vk::PipelineLayoutCreateInfo({}, layouts));
-  pool_ = makePool(sets);
+  pool_ = makePool(1);
 }
 
 vk::raii::DescriptorPool KernelLayout::makePool(std::uint32_t sets) const {

@@ -1,6 +1,6 @@
 // One small compute kernel's resource layout, built in one place: its descriptor-set layout (one
 // descriptor per binding, all for the compute stage), its pipeline layout (that set and an optional
-// push-constant range at offset 0) and a pool with room for a number of such sets. The renderer's
+// push-constant range at offset 0) and a pool with room for one such set. The renderer's
 // own layout (render/descriptors.h) is richer; this serves the probe, the loop-limit probe and the
 // viewer's resolve and convergence passes.
 #pragma once
@@ -23,11 +23,9 @@ struct KernelBinding {
 class KernelLayout {
 public:
   KernelLayout() = default;
-  // pushBytes 0: no push constants. sets: how many sets the layout's own pool can hold.
-  KernelLayout(const Context& context, std::initializer_list<KernelBinding> bindings, std::uint32_t pushBytes,
-               std::uint32_t sets = 1);
+  // pushBytes 0: no push constants.
+  KernelLayout(const Context& context, std::initializer_list<KernelBinding> bindings, std::uint32_t pushBytes);
 
-  vk::DescriptorSetLayout setLayout() const { return *setLayout_; }
   vk::PipelineLayout pipelineLayout() const { return *pipelineLayout_; }
   // `count` sets of this layout from its own pool (freeable one by one).
   vk::raii::DescriptorSets allocate(std::uint32_t count = 1) const;
