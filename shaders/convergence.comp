@@ -1,8 +1,9 @@
 // The viewer's convergence pass (host/viewer/convergence.h): each pixel's estimated standard error
 // while samples accumulate, and its reduction to the figures the overlay shows. The estimate is
-// render --noise-threshold's (host/render/adaptive.cpp, standardError): the mean A of the pixel's
-// n1 earlier samples (the sums' copy taken when the count last doubled) against the mean B of the
-// n2 since; with independent halves var(mean) = (A - B)^2 n1 n2 / n^2, the largest of R, G and B.
+// of the kind render --noise-threshold makes (host/render/adaptive.cpp, blockVariance), from two
+// blocks where the headless passes have four: the mean A of the pixel's n1 earlier samples (the
+// sums' copy taken when the count last doubled) against the mean B of the n2 since; with
+// independent halves var(mean) = (A - B)^2 n1 n2 / n^2, the largest of R, G and B.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -49,8 +50,8 @@ void main() {
     return;
   }
   // Step 1: the pixel's bin, and whether it has converged as adaptive.cpp's neighbourhoodError
-  // judges it: half its own squared estimate, half the mean square over the 3 x 3 pixels inside the
-  // image. Squares of estimates capped at 1e18, so that no estimate squares to +inf: one without
+  // judges it: kConvergenceOwnShare of its own squared estimate, the rest of the mean square over
+  // the 3 x 3 pixels inside the image. Squares of estimates capped at 1e18, so that no estimate squares to +inf: one without
   // an estimate (kNoEstimate) still never converges.
   bool converged = false;
   bool unestimated = false;
@@ -70,7 +71,7 @@ void main() {
       }
     }
     float own = min(e, 1e18);
-    converged = 0.5 * (own * own + sum / count) <= THRESHOLD * THRESHOLD;
+    converged = kConvergenceOwnShare * own * own + (1.0 - kConvergenceOwnShare) * sum / count <= THRESHOLD * THRESHOLD;
     if (!unestimated) {
       float bin = (log2(max(e, 1e-30)) - float(kHistogramLowLog2)) * float(kHistogramBinsPerOctave);
       uint b = uint(clamp(bin, 0.0, float(kHistogramBins - 1u)));

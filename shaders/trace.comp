@@ -307,7 +307,8 @@ void flushStats() {
 
 // A progressive pass (host/render/adaptive.h): the host lists the pixels still open, (x, y) as
 // floats, so SIMD lanes stay full however few remain. Two texels per entry: (sum rgb, samples) and
-// (sum of squares rgb, rays traced), from which the host estimates each pixel's standard error.
+// (sum rgb of the pass's first half, rays traced): the samples whose sequence index is below
+// pc.splitBase. From the halves of its passes the host estimates each pixel's standard error.
 //
 // `pc.param` lanes (a power of two; 1 when the dispatch takes one sample per pixel) share one entry
 // and trace its samples side by side, lane j sample j of each round: late passes list scattered
@@ -346,15 +347,16 @@ void listPass() {
       vec2 lensUv = THIN_LENS ? lensSample(pc.sampleBase + k, hashPcg(index)) : vec2(0.0);
       radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)), lensUv);
     }
+    uint split = opaqueUniform(pc.splitBase);
     if (lanes == 1u) {
       first.rgb += radiance;
-      second.rgb += radiance * radiance;
+      if (pc.sampleBase + k < split) second.rgb += radiance;
     } else {
       for (uint j = 0u; j < lanes; ++j) {
         vec3 r = subgroupShuffle(radiance, firstLane + j);
         if (round0 + j < count) {
           first.rgb += r;
-          second.rgb += r * r;
+          if (pc.sampleBase + round0 + j < split) second.rgb += r;
         }
       }
     }

@@ -20,57 +20,94 @@ namespace {
 
 // ---- Host: the estimate and the schedule ----------------------------------------------------
 
-PixelMoments moments(const std::vector<double>& earlier, const std::vector<double>& last) {
-  PixelMoments m;
-  for (double v : earlier) m.sum += glm::dvec3(v), m.squares += glm::dvec3(v * v), m.samples += 1;
-  m.earlierSum = m.sum;
-  m.earlierSamples = m.samples;
-  for (double v : last) m.sum += glm::dvec3(v), m.squares += glm::dvec3(v * v), m.samples += 1;
-  return m;
+// Adds one pass of a pixel's samples (the same in R, G and B) as the renderer does: the sum, and
+// the sum of the pass's first half.
+void pass(ProgressiveImage& img, std::uint32_t x, const std::vector<double>& samples) {
+  glm::vec4 sums(0.0f), half(0.0f);
+  const std::size_t halfCount = samples.size() / 2;
+  for (std::size_t i = 0; i < samples.size(); ++i) {
+    sums += glm::vec4(glm::vec3(static_cast<float>(samples[i])), 1.0f);
+    if (i < halfCount) half += glm::vec4(glm::vec3(static_cast<float>(samples[i])), 0.0f);
+  }
+  img.add(x, 0, sums, half, static_cast<double>(halfCount));
 }
 
-TEST(Progressive, SplitHalfErrorIsTheDifferenceOfTheHalvesMeansOverTwo) {
-  // A = 0.25 (4 samples), B = 0.75 (4 samples): |A - B| sqrt(4 * 4) / 8 = 0.25.
-  PixelMoments m = moments({0, 0.5, 0, 0.5}, {1, 0.5, 1, 0.5});
-  EXPECT_DOUBLE_EQ(standardError(m), 0.25);
-  // Unequal parts, n1 = 2, n2 = 6: |A - B| sqrt(12) / 8.
-  PixelMoments u = moments({1, 1}, {0, 0, 0, 0, 0, 0});
-  EXPECT_NEAR(standardError(u), std::sqrt(12.0) / 8.0, 1e-15);
+TEST(Progressive, OnePassErrorIsTheDifferenceOfItsHalvesMeansOverTwo) {
+  // A = 0.25, B = 0.75 (two samples each): (A - B)^2 n1 n2 / n^2 = 0.25 * 4 / 16, error 0.25.
+  ProgressiveImage img(1, 1);
+  pass(img, 0, {0, 0.5, 1, 0.5});
+  EXPECT_DOUBLE_EQ(img.error(0, 0), 0.25);
+  double dof = -1.0;
+  EXPECT_DOUBLE_EQ(blockVariance(img.at(0, 0), &dof), 0.0625);
+  EXPECT_EQ(dof, 1.0);
+  // Unequal halves, n1 = 1, n2 = 2 (a pass of three): |A - B| sqrt(2) / 3.
+  ProgressiveImage odd(1, 1);
+  pass(odd, 0, {1, 0, 0});
+  EXPECT_NEAR(odd.error(0, 0), std::sqrt(2.0) / 3.0, 1e-15);
 }
 
-TEST(Progressive, OnePassErrorIsTheSampleVarianceOverN) {
-  // Samples 0, 1, 0, 1: unbiased variance 1/3, standard error sqrt(1/3 / 4).
-  PixelMoments m = moments({}, {0, 1, 0, 1});
-  EXPECT_NEAR(standardError(m), std::sqrt(1.0 / 12.0), 1e-15);
-  EXPECT_TRUE(std::isinf(standardError(moments({}, {0.5}))));
-  EXPECT_EQ(standardError(moments({0.5, 0.5}, {0.5, 0.5})), 0.0);
+TEST(Progressive, FourBlocksPooledWithThePreviousDecisionsEstimate) {
+  // Passes of 2, 2 and 4 samples: 0 0 | 1 1 | 0 0 1 1. The last add sees four blocks of two, means
+  // 0, 1, 0, 1 around 0.5: sum m (x - 0.5)^2 = 2, over J - 1 = 3 and n = 8: 1/12, three degrees of
+  // freedom. The add before saw blocks {0, 0}, {1}, {1} around 0.5: 1 over 2 and 4, 1/8, two
+  // degrees of freedom, of the mean of 4 samples: 1/16 for 8. Pooled: (3/12 + 2/16) / 5 = 0.075.
+  // (That add itself pooled its 1/8 with the first pass's halves, {0} and {0}: 0 with one degree
+  // of freedom, (2/8 + 0) / 3.)
+  ProgressiveImage img(1, 1);
+  pass(img, 0, {0, 0});
+  EXPECT_EQ(img.error(0, 0), 0.0);
+  pass(img, 0, {1, 1});
+  EXPECT_DOUBLE_EQ(img.error(0, 0), std::sqrt(1.0 / 12.0));
+  pass(img, 0, {0, 0, 1, 1});
+  double dof = 0.0;
+  EXPECT_DOUBLE_EQ(blockVariance(img.at(0, 0), &dof), 1.0 / 12.0);
+  EXPECT_EQ(dof, 3.0);
+  EXPECT_EQ(img.at(0, 0).previousDof, 2.0);
+  EXPECT_NEAR(img.error(0, 0), std::sqrt(0.075), 1e-15);
+  // The blocks move on by a pass: before the pass before the last, 4 samples of mean 0.5.
+  pass(img, 0, {0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5});
+  EXPECT_EQ(img.at(0, 0).previousSamples, 4.0);
+  EXPECT_EQ(img.at(0, 0).earlierSamples, 8.0);
+}
+
+TEST(Progressive, NoEstimateFromOneBlockAndNoneBelowTwoSamples) {
+  ProgressiveImage one(1, 1);
+  pass(one, 0, {0.5}); // the pass's first half is empty: one block
+  EXPECT_TRUE(std::isinf(one.error(0, 0)));
+  pass(one, 0, {0.5}); // two blocks of one, equal
+  EXPECT_EQ(one.error(0, 0), 0.0);
+  ProgressiveImage flat(1, 1);
+  pass(flat, 0, {0.5, 0.5});
+  pass(flat, 0, {0.5, 0.5});
+  EXPECT_EQ(flat.error(0, 0), 0.0);
 }
 
 TEST(Progressive, ErrorIsTheLargestChannels) {
-  PixelMoments m = moments({0, 0}, {0, 0});
-  m.sum.g = 2.0; // the last pass's green mean is 1, the earlier one's 0
-  EXPECT_DOUBLE_EQ(standardError(m), 0.5);
+  ProgressiveImage img(1, 1);
+  // Green: halves of means 0 and 1 (two samples each), 0.5; red and blue exact.
+  img.add(0, 0, glm::vec4(0.0f, 2.0f, 0.0f, 4.0f), glm::vec4(0.0f), 2.0);
+  EXPECT_DOUBLE_EQ(img.error(0, 0), 0.5);
 }
 
 TEST(Progressive, NeighbourhoodDecidesWhoStaysOpen) {
   ProgressiveImage img(5, 1);
-  // Pixels 0..4 with two passes each; pixel 2 noisy (error 0.5), the others exact.
-  for (std::uint32_t x = 0; x < 5; ++x) {
-    img.add(x, 0, glm::vec4(x == 2 ? 0.0f : 1.0f, 0, 0, 2), glm::vec4(0));
-    img.add(x, 0, glm::vec4(x == 2 ? 4.0f : 1.0f, 0, 0, 2), glm::vec4(0));
-  }
-  EXPECT_DOUBLE_EQ(img.error(2, 0), 1.0); // A = 0, B = 2: |0 - 2| sqrt(4) / 4 = 1
-  // Half the pixel's own square, half its neighbourhood's mean square: pixel 1, exact itself next to
-  // the noisy one, (0 + (0 + 0 + 1) / 3) / 2; pixel 2, (1 + (0 + 1 + 0) / 3) / 2.
-  EXPECT_DOUBLE_EQ(img.neighbourhoodError(1, 0), std::sqrt(1.0 / 6.0));
-  EXPECT_DOUBLE_EQ(img.neighbourhoodError(2, 0), std::sqrt(2.0 / 3.0));
+  // Pixels 0..4 with one pass of four each; pixel 2 noisy (halves of means 0 and 2: error 1), the
+  // others exact.
+  for (std::uint32_t x = 0; x < 5; ++x)
+    pass(img, x, x == 2 ? std::vector<double>{0, 0, 2, 2} : std::vector<double>{1, 1, 1, 1});
+  EXPECT_DOUBLE_EQ(img.error(2, 0), 1.0);
+  // kOwnShare of the pixel's own square, the rest of its neighbourhood's mean square: pixel 1,
+  // exact itself next to the noisy one, 0.2 (0 + 0 + 1) / 3; pixel 2, 0.8 + 0.2 (0 + 1 + 0) / 3.
+  ASSERT_EQ(ProgressiveImage::kOwnShare, 0.8);
+  EXPECT_DOUBLE_EQ(img.neighbourhoodError(1, 0), std::sqrt(0.2 / 3.0));
+  EXPECT_DOUBLE_EQ(img.neighbourhoodError(2, 0), std::sqrt(0.8 + 0.2 / 3.0));
   EXPECT_DOUBLE_EQ(img.neighbourhoodError(0, 0), 0.0);
   std::vector<std::uint32_t> all{0, 1, 2, 3, 4};
-  // At 0.9 every pixel closes; at 0.5 the noisy pixel stays open and no longer holds its settled
-  // neighbours (0.41) with it; at 0.4 they stay open too.
-  EXPECT_TRUE(img.stillOpen(all, 0.9).empty());
+  // At 0.95 every pixel closes; at 0.5 the noisy pixel (0.93) stays open and no longer holds its
+  // settled neighbours (0.26) with it; at 0.2 they stay open too.
+  EXPECT_TRUE(img.stillOpen(all, 0.95).empty());
   EXPECT_EQ(img.stillOpen(all, 0.5), (std::vector<std::uint32_t>{2}));
-  EXPECT_EQ(img.stillOpen(all, 0.4), (std::vector<std::uint32_t>{1, 2, 3}));
+  EXPECT_EQ(img.stillOpen(all, 0.2), (std::vector<std::uint32_t>{1, 2, 3}));
   // Only pixels open before can stay open.
   EXPECT_EQ(img.stillOpen({2}, 0.5), (std::vector<std::uint32_t>{2}));
 }
@@ -83,7 +120,7 @@ TEST(Progressive, ThresholdScheduleDoublesUpToTheCap) {
   std::vector<std::uint32_t> passes;
   std::uint32_t n = 0;
   while (std::uint32_t k = nextPassSamples(s, n, 10, 0.0, 0.0)) passes.push_back(k), n += k;
-  EXPECT_EQ(passes, (std::vector<std::uint32_t>{8, 8, 16, 32, 36}));
+  EXPECT_EQ(passes, (std::vector<std::uint32_t>{4, 4, 8, 16, 32, 36}));
   EXPECT_EQ(nextPassSamples(s, 16, 0, 0.0, 0.0), 0u); // nothing open
 }
 

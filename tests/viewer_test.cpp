@@ -22,6 +22,7 @@
 
 #include "image/image_io.h"
 #include "image/metrics.h"
+#include "render/adaptive.h"
 #include "scene/features.h"
 #include "scene/scene_loader.h"
 #include "viewer/scene_watcher.h"
@@ -523,8 +524,9 @@ TEST_F(Viewer, AFlatSceneHasNoErrorAndHasConvergedEverywhere) {
 }
 
 // The converged share is the headless stopping rule applied to the estimates the error map shows:
-// a pixel has converged when half its own squared estimate plus half the mean square over its 3 x 3
-// neighbourhood (inside the image) is at most the threshold squared (host/render/adaptive.h).
+// a pixel has converged when kOwnShare of its own squared estimate plus the rest of the mean square
+// over its 3 x 3 neighbourhood (inside the image) is at most the threshold squared
+// (host/render/adaptive.h).
 TEST_F(Viewer, TheConvergedShareIsTheHeadlessRuleOnTheErrorMap) {
   fs::path shot = dir_ / "estimates.pfm";
   RunResult r = vkray("view '" + scene("showcase.json") + "' --width 64 --height 48 --frames 8 --display error " +
@@ -547,7 +549,8 @@ TEST_F(Viewer, TheConvergedShareIsTheHeadlessRuleOnTheErrorMap) {
         }
       }
       const double own = e.at(x, y).x;
-      converged += 0.5 * (own * own + sum / count) <= 0.01 * 0.01;
+      const double ownShare = ProgressiveImage::kOwnShare;
+      converged += ownShare * own * own + (1.0 - ownShare) * sum / count <= 0.01 * 0.01;
     }
   }
   const double share = 100.0 * double(converged) / double(e.pixels.size());

@@ -73,7 +73,7 @@ struct BenchAdaptiveArgs {
   int runs = 5;
   std::uint32_t height = 180;
   int referenceSpp = 1024;
-  std::vector<double> thresholds{0.008, 0.004, 0.002, 0.001};
+  std::vector<double> thresholds{0.016, 0.008, 0.004, 0.002};
   int minSpp = 16, maxSpp = 1024;             // the thresholds' min_spp and max_spp
   int minUniformSpp = 4, maxUniformSpp = 256; // uniform sampling at the powers of two between
 };

@@ -2,12 +2,17 @@
 #include "render/adaptive.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 
+#include "../../shaders/shared/resolve_types.h"
 #include "util/error.h"
 
 namespace vkray {
+
+// The viewer's converged share applies the same rule (shaders/convergence.comp).
+static_assert(static_cast<float>(ProgressiveImage::kOwnShare) == gpu::kConvergenceOwnShare);
 
 void checkProgressiveSettings(const RenderSettings& s) {
   if (s.progressive() && s.minSpp > s.maxSpp) {
@@ -21,45 +26,68 @@ void checkProgressiveSettings(const RenderSettings& s) {
   }
 }
 
-double standardError(const PixelMoments& m) {
-  const double n = m.samples;
-  if (n < 2.0) return std::numeric_limits<double>::infinity();
-  const double n1 = m.earlierSamples, n2 = n - n1;
+double blockVariance(const PixelMoments& m, double* dof) {
+  // The blocks as (sum, samples): earlier ones first, in the sequence's order.
+  const glm::dvec3 lastSum = m.sum - m.earlierSum;
+  const double lastSamples = m.samples - m.earlierSamples;
+  const std::array<std::pair<glm::dvec3, double>, 4> blocks{{
+      {m.previousSum, m.previousSamples},
+      {m.earlierSum - m.previousSum, m.earlierSamples - m.previousSamples},
+      {m.halfSum, m.halfSamples},
+      {lastSum - m.halfSum, lastSamples - m.halfSamples},
+  }};
+  int count = 0;
+  for (const auto& b : blocks) count += b.second > 0.0 ? 1 : 0;
+  if (dof) *dof = std::max(0, count - 1);
+  if (count < 2) return 0.0;
+  const glm::dvec3 mean = m.sum / m.samples;
   double worst = 0.0;
-  if (n1 > 0.0 && n2 > 0.0) {
-    // Split in two: the earlier passes' mean A and the last pass's mean B. With independent parts
-    // of per-sample variance s^2, var(A - B) = s^2 n / (n1 n2) and var(mean) = s^2 / n, so
-    // var(mean) = (A - B)^2 n1 n2 / n^2. Each part is a whole stratum of the sequence (counts
-    // double), so the difference sees the error the stratified mean actually has.
-    for (int c = 0; c < 3; ++c) {
-      const double a = m.earlierSum[c] / n1, b = (m.sum[c] - m.earlierSum[c]) / n2;
-      worst = std::max(worst, (a - b) * (a - b) * n1 * n2 / (n * n));
-    }
-    return std::sqrt(worst);
-  }
-  // One pass so far: the samples' own variance, as if they were independent (an overestimate for a
-  // stratified sequence). sum2 - sum^2 / n, the sum of squared deviations, can round just below 0.
   for (int c = 0; c < 3; ++c) {
-    double deviations = std::max(0.0, m.squares[c] - m.sum[c] * m.sum[c] / n);
-    worst = std::max(worst, deviations / (n * (n - 1.0)));
+    double squares = 0.0; // sum_j m_j (x_j - x)^2
+    for (const auto& [sum, samples] : blocks) {
+      if (samples <= 0.0) continue;
+      const double d = sum[c] / samples - mean[c];
+      squares += samples * d * d;
+    }
+    worst = std::max(worst, squares / (count - 1) / m.samples);
   }
-  return std::sqrt(worst);
+  return worst;
+}
+
+double standardError(const PixelMoments& m) {
+  if (m.samples < 2.0) return std::numeric_limits<double>::infinity();
+  double dof = 0.0;
+  const double v = blockVariance(m, &dof);
+  if (dof <= 0.0) return std::numeric_limits<double>::infinity();
+  // The previous estimate was of the mean of earlierSamples; as 1 / n, it scales to this count.
+  // (A stratified sequence converges faster than 1 / n, so it leans towards more samples.)
+  const double pooled =
+      m.previousDof > 0.0 && m.earlierSamples > 0.0
+          ? (dof * v + m.previousDof * m.previousVariance * (m.earlierSamples / m.samples)) / (dof + m.previousDof)
+          : v;
+  return std::sqrt(pooled);
 }
 
 ProgressiveImage::ProgressiveImage(std::uint32_t width, std::uint32_t height)
     : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height),
       errors_(pixels_.size(), std::numeric_limits<double>::infinity()) {}
 
-void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& squaresAndRays) {
+void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays,
+                           double halfSamples) {
   std::size_t i = static_cast<std::size_t>(y) * width_ + x;
   PixelMoments& m = pixels_[i];
-  // One call per pixel per pass: what the pixel had so far becomes the estimate's earlier part.
+  // One call per pixel per pass: the blocks shift by one pass, and the estimate they gave so far
+  // becomes the previous decision's.
+  m.previousVariance = blockVariance(m, &m.previousDof);
+  m.previousSum = m.earlierSum;
+  m.previousSamples = m.earlierSamples;
   m.earlierSum = m.sum;
   m.earlierSamples = m.samples;
   m.sum += glm::dvec3(glm::vec3(sums));
   m.samples += sums.w;
-  m.squares += glm::dvec3(glm::vec3(squaresAndRays));
-  m.rays += squaresAndRays.w;
+  m.halfSum = glm::dvec3(glm::vec3(halfAndRays));
+  m.halfSamples = halfSamples;
+  m.rays += halfAndRays.w;
   errors_[i] = standardError(m);
 }
 
@@ -79,7 +107,7 @@ double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) co
   }
   if (count == 0) return std::numeric_limits<double>::infinity();
   const double own = errors_[static_cast<std::size_t>(y) * width_ + x];
-  return std::sqrt(0.5 * (own * own + sum / count));
+  return std::sqrt(kOwnShare * own * own + (1.0 - kOwnShare) * sum / count);
 }
 
 std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::uint32_t>& open, double threshold) const {
@@ -122,10 +150,10 @@ std::uint32_t nextPassSamples(const RenderSettings& s, std::uint32_t samplesSoFa
   if (!s.progressive()) {
     k = samplesSoFar == 0 ? std::max(1u, cap / 2) : cap - samplesSoFar; // two halves: an estimate
   } else if (samplesSoFar == 0) {
-    // With a noise threshold every pixel gets min_spp in two passes of half each, so the first
-    // decision has two parts to compare; a time limit alone starts at one sample, which also
-    // measures the speed.
-    k = s.noiseThreshold > 0.0 ? static_cast<std::uint32_t>(std::max(1, s.minSpp / 2)) : 1u;
+    // With a noise threshold every pixel gets min_spp in three passes (a quarter, a quarter, a
+    // half), so the first decision has four blocks to compare and the second pass's estimate to
+    // pool; a time limit alone starts at one sample, which also measures the speed.
+    k = s.noiseThreshold > 0.0 ? static_cast<std::uint32_t>(std::max(1, s.minSpp / 4)) : 1u;
   } else {
     k = samplesSoFar; // the count doubles
   }

@@ -2,19 +2,21 @@
 // and how many samples the next pass gives them. Pure host code (no device): the Renderer runs the
 // passes (Renderer::renderProgressive), this decides them.
 //
-// A pass traces k more samples of every open pixel: min_spp / 2 twice, then as many as each open
+// A pass traces k more samples of every open pixel: min_spp / 4 twice, then as many as each open
 // pixel already has (its count doubles, which keeps the Sobol-Owen sequence's power-of-two strata
-// whole), never past max_spp. Once a pixel has min_spp samples, it stays open while the RMS of the
-// estimated standard errors over its 3 x 3 neighbourhood is above the noise threshold: one pixel's
-// estimate has few degrees of freedom, and a pixel whose samples all fell on one side of an edge
-// looks noiseless where its neighbours do not.
+// whole), never past max_spp. Once a pixel has min_spp samples, it stays open while its error,
+// blended with the RMS of the estimated standard errors over its 3 x 3 neighbourhood, is above the
+// noise threshold: one pixel's estimate has few degrees of freedom, and a pixel whose samples all
+// fell on one side of an edge looks noiseless where its neighbours do not.
 //
-// The estimate compares the mean of a pixel's earlier passes with the mean of its last pass (a
-// split-half estimate): for a stratified sequence the samples' own variance overstates the error
-// of their mean several times over, and spends samples where the mean has already converged. With a
-// time limit, a
-// pass is shortened (fewer samples) to fit what is left of the budget at the speed measured so far,
-// and no pass starts that cannot trace one sample of every open pixel in it.
+// The estimate compares the means of whole blocks of the sequence instead of the samples' own
+// variance: for a stratified sequence that variance overstates the error of their mean several
+// times over, and spends samples where the mean has already converged. Each pass's sums come in two
+// halves, so a decision sees four blocks, in quarters of the samples while counts double: all before
+// the pass before the last, that pass, and the last pass's two halves (three degrees of freedom per
+// channel), pooled with the estimate the previous decision made. With a time limit, a pass is
+// shortened (fewer samples) to fit what is left of the budget at the speed measured so far, and no
+// pass starts that cannot trace one sample of every open pixel in it.
 #pragma once
 
 #include <cstdint>
@@ -35,17 +37,31 @@ void checkProgressiveSettings(const RenderSettings& settings);
 // One pixel's running sums, in double: the host adds each pass's float sums to them.
 struct PixelMoments {
   glm::dvec3 sum{0.0};
-  glm::dvec3 squares{0.0};
   double samples = 0.0;
   double rays = 0.0;
   glm::dvec3 earlierSum{0.0}; // sum and samples before the last pass
   double earlierSamples = 0.0;
+  glm::dvec3 previousSum{0.0}; // before the pass before the last
+  double previousSamples = 0.0;
+  glm::dvec3 halfSum{0.0}; // the last pass's first half
+  double halfSamples = 0.0;
+  // What blockVariance gave before the last pass (the variance of the mean of earlierSamples), and
+  // its degrees of freedom (0: none).
+  double previousVariance = 0.0;
+  double previousDof = 0.0;
 };
 
-// The estimated standard error of the pixel's mean, the largest of R, G and B. From two parts (the
-// earlier passes, mean A of n1 samples, and the last pass, mean B of n2) when the pixel has both:
-// |A - B| sqrt(n1 n2) / n. From one pass, the unbiased sample variance over n. Infinite below two
-// samples.
+// The blocks' estimate of the variance of the pixel's mean, the largest of R, G and B: the blocks
+// are all before the pass before the last, that pass, and the last pass's two halves (empty ones
+// left out). With J blocks of m_j samples and means x_j, around the mean x of all n samples, the
+// per-sample variance is sum_j m_j (x_j - x)^2 / (J - 1) for independent samples, and the mean's
+// is that over n. For two halves this is (A - B)^2 n1 n2 / n^2. `dof`: J - 1 (0: fewer than two
+// blocks, and the result is 0).
+double blockVariance(const PixelMoments& m, double* dof = nullptr);
+
+// The estimated standard error of the pixel's mean: blockVariance pooled with the previous
+// decision's, scaled to this sample count (as 1 / n), weighted by their degrees of freedom.
+// Infinite below two samples or without two blocks.
 double standardError(const PixelMoments& m);
 
 class ProgressiveImage {
@@ -53,18 +69,19 @@ public:
   ProgressiveImage(std::uint32_t width, std::uint32_t height);
   std::uint32_t width() const { return width_; }
   std::uint32_t height() const { return height_; }
-  // Adds one pass's sums of a pixel: (sum rgb, samples) and (sum of squares rgb, rays).
-  void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& squaresAndRays);
+  // Adds one pass's sums of a pixel: (sum rgb, samples) and (sum rgb of the pass's first
+  // `halfSamples` samples, rays).
+  void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays, double halfSamples);
   const PixelMoments& at(std::uint32_t x, std::uint32_t y) const {
     return pixels_[static_cast<std::size_t>(y) * width_ + x];
   }
   double error(std::uint32_t x, std::uint32_t y) const { return errors_[static_cast<std::size_t>(y) * width_ + x]; }
-  // The pixel's error as the threshold judges it: the root of the mean of its own squared
-  // standardError and the mean square over its 3 x 3 neighbourhood (pixels traced so far). One
-  // split-half estimate has a single degree of freedom per channel, so the neighbourhood steadies
-  // it; the pixel's own half keeps a noisy neighbour from holding a settled pixel open. Against the
-  // neighbourhood's RMS alone this reaches the same 95th-percentile error with 10-18 % fewer
-  // samples (docs/progressive.md); the RMS in turn needed a tenth fewer than the plain mean.
+  // The pixel's error as the threshold judges it: the root of kOwnShare of its own squared
+  // standardError plus the rest of the mean square over its 3 x 3 neighbourhood (pixels traced so
+  // far). One estimate has a few degrees of freedom per channel, so the neighbourhood steadies it;
+  // the pixel's own share keeps a noisy neighbour from holding a settled pixel open
+  // (docs/progressive.md, "The estimate").
+  static constexpr double kOwnShare = 0.8;
   double neighbourhoodError(std::uint32_t x, std::uint32_t y) const;
   // Of `open` (row-major pixel indices), those whose neighbourhood error is above `threshold`.
   std::vector<std::uint32_t> stillOpen(const std::vector<std::uint32_t>& open, double threshold) const;

@@ -483,6 +483,9 @@ struct PushConstants {
   // Per kernel: trace.comp's tile-row stride (the sample pass, see Renderer::recordDispatch; 0 or 1:
   // rows in order); forward.comp's contribution scale (float bits).
   uint param;
+  // The list pass: the sequence index where the pass's second half starts; the samples below it
+  // also go into the first half's sum (host/render/adaptive.h).
+  uint splitBase;
 };
 
 // ---- The ray-tree recorder (kSpecRecordTree, shaders/lib/tree_record.glsl) ----------------------

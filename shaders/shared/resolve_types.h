@@ -54,6 +54,10 @@ VKRAY_CONST(uint, kHistogramBins, 128u);
 VKRAY_CONST(uint, kHistogramBinsPerOctave, 4u);
 VKRAY_CONST(int, kHistogramLowLog2, -24);
 VKRAY_CONST(uint, kHistogramWords, 132u); // kHistogramFirstBin + kHistogramBins
+// A pixel has converged when kConvergenceOwnShare of its own squared estimate plus the rest of the
+// mean square over its 3 x 3 neighbourhood is at most the threshold squared: the headless rule
+// (ProgressiveImage::kOwnShare, host/render/adaptive.h, which checks that the two agree).
+VKRAY_CONST(float, kConvergenceOwnShare, 0.8);
 
 // Push constants: uvec2(width, height) of the image.
 
