@@ -123,7 +123,7 @@ VKRAY_CONST(uint, kSpecAlphaMask, 29u);
 // Some triangle has vertex colours (glTF COLOR_0).
 VKRAY_CONST(uint, kSpecVertexColors, 30u);
 // The progressive renderer's pass (kPassList, host/render/adaptive.h): each invocation traces the
-// pixel of one entry of a list of open pixels and writes its sums and sums of squares.
+// pixel of one entry of a list of open pixels and writes its sums, whole and of the pass's first half.
 VKRAY_CONST(uint, kSpecListPass, 31u);
 // The sample pass adds each pixel's rays to PixelRays[] (kBindingPixelRays): the viewer's cost map.
 // Off in every headless pipeline, where the count and its store compile out.
