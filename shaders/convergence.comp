@@ -51,8 +51,8 @@ void main() {
   }
   // Step 1: the pixel's bin, and whether it has converged as adaptive.cpp's neighbourhoodError
   // judges it: kConvergenceOwnShare of its own squared estimate, the rest of the mean square over
-  // the 3 x 3 pixels inside the image. Squares of estimates capped at 1e18, so that no estimate squares to +inf: one without
-  // an estimate (kNoEstimate) still never converges.
+  // the 3 x 3 pixels inside the image. Squares of estimates capped at 1e18, so that no estimate
+  // squares to +inf: one without an estimate (kNoEstimate) still never converges.
   bool converged = false;
   bool unestimated = false;
   if (inside) {

@@ -329,6 +329,7 @@ void listPass() {
   loadEntryPoints(pixel, 0u); // the host found them for the whole image, per lane's own tile
   uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
   uint count = opaqueUniform(pc.sampleCount);
+  uint split = opaqueUniform(pc.splitBase); // samples below it also go into the first half's sum
   // The sums start from the entry's earlier dispatches of this pass: each sample is added to the
   // running sum one at a time, in the sequence's order, whether the host gave a dispatch one sample
   // or several and however many lanes traced them, so the float rounding (and the image) does not
@@ -347,7 +348,6 @@ void listPass() {
       vec2 lensUv = THIN_LENS ? lensSample(pc.sampleBase + k, hashPcg(index)) : vec2(0.0);
       radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)), lensUv);
     }
-    uint split = opaqueUniform(pc.splitBase);
     if (lanes == 1u) {
       first.rgb += radiance;
       if (pc.sampleBase + k < split) second.rgb += radiance;

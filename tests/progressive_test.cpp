@@ -24,12 +24,12 @@ namespace {
 // the sum of the pass's first half.
 void pass(ProgressiveImage& img, std::uint32_t x, const std::vector<double>& samples) {
   glm::vec4 sums(0.0f), half(0.0f);
-  const std::size_t halfCount = samples.size() / 2;
+  const std::size_t halfCount = firstHalf(static_cast<std::uint32_t>(samples.size()));
   for (std::size_t i = 0; i < samples.size(); ++i) {
     sums += glm::vec4(glm::vec3(static_cast<float>(samples[i])), 1.0f);
     if (i < halfCount) half += glm::vec4(glm::vec3(static_cast<float>(samples[i])), 0.0f);
   }
-  img.add(x, 0, sums, half, static_cast<double>(halfCount));
+  img.add(x, 0, sums, half);
 }
 
 TEST(Progressive, OnePassErrorIsTheDifferenceOfItsHalvesMeansOverTwo) {
@@ -85,7 +85,7 @@ TEST(Progressive, NoEstimateFromOneBlockAndNoneBelowTwoSamples) {
 TEST(Progressive, ErrorIsTheLargestChannels) {
   ProgressiveImage img(1, 1);
   // Green: halves of means 0 and 1 (two samples each), 0.5; red and blue exact.
-  img.add(0, 0, glm::vec4(0.0f, 2.0f, 0.0f, 4.0f), glm::vec4(0.0f), 2.0);
+  img.add(0, 0, glm::vec4(0.0f, 2.0f, 0.0f, 4.0f), glm::vec4(0.0f));
   EXPECT_DOUBLE_EQ(img.error(0, 0), 0.5);
 }
 

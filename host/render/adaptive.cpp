@@ -30,11 +30,12 @@ double blockVariance(const PixelMoments& m, double* dof) {
   // The blocks as (sum, samples): earlier ones first, in the sequence's order.
   const glm::dvec3 lastSum = m.sum - m.earlierSum;
   const double lastSamples = m.samples - m.earlierSamples;
+  const double halfSamples = firstHalf(static_cast<std::uint32_t>(lastSamples));
   const std::array<std::pair<glm::dvec3, double>, 4> blocks{{
       {m.previousSum, m.previousSamples},
       {m.earlierSum - m.previousSum, m.earlierSamples - m.previousSamples},
-      {m.halfSum, m.halfSamples},
-      {lastSum - m.halfSum, lastSamples - m.halfSamples},
+      {m.halfSum, halfSamples},
+      {lastSum - m.halfSum, lastSamples - halfSamples},
   }};
   int count = 0;
   for (const auto& b : blocks) count += b.second > 0.0 ? 1 : 0;
@@ -72,8 +73,7 @@ ProgressiveImage::ProgressiveImage(std::uint32_t width, std::uint32_t height)
     : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height),
       errors_(pixels_.size(), std::numeric_limits<double>::infinity()) {}
 
-void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays,
-                           double halfSamples) {
+void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays) {
   std::size_t i = static_cast<std::size_t>(y) * width_ + x;
   PixelMoments& m = pixels_[i];
   // One call per pixel per pass: the blocks shift by one pass, and the estimate they gave so far
@@ -86,7 +86,6 @@ void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& su
   m.sum += glm::dvec3(glm::vec3(sums));
   m.samples += sums.w;
   m.halfSum = glm::dvec3(glm::vec3(halfAndRays));
-  m.halfSamples = halfSamples;
   m.rays += halfAndRays.w;
   errors_[i] = standardError(m);
 }

@@ -34,6 +34,13 @@ namespace vkray {
 // adaptive antialiasing): InputError naming the key.
 void checkProgressiveSettings(const RenderSettings& settings);
 
+// How many of a pass's k samples make its first half: the kernel adds the samples before the
+// pass's first sample plus this (PushConstants::splitBase) to the half's sum, and the estimate's
+// blocks are cut there.
+constexpr std::uint32_t firstHalf(std::uint32_t k) {
+  return k / 2;
+}
+
 // One pixel's running sums, in double: the host adds each pass's float sums to them.
 struct PixelMoments {
   glm::dvec3 sum{0.0};
@@ -43,8 +50,7 @@ struct PixelMoments {
   double earlierSamples = 0.0;
   glm::dvec3 previousSum{0.0}; // before the pass before the last
   double previousSamples = 0.0;
-  glm::dvec3 halfSum{0.0}; // the last pass's first half
-  double halfSamples = 0.0;
+  glm::dvec3 halfSum{0.0}; // the last pass's first half (firstHalf of its samples)
   // What blockVariance gave before the last pass (the variance of the mean of earlierSamples), and
   // its degrees of freedom (0: none).
   double previousVariance = 0.0;
@@ -70,8 +76,8 @@ public:
   std::uint32_t width() const { return width_; }
   std::uint32_t height() const { return height_; }
   // Adds one pass's sums of a pixel: (sum rgb, samples) and (sum rgb of the pass's first
-  // `halfSamples` samples, rays).
-  void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays, double halfSamples);
+  // firstHalf(samples) samples, rays).
+  void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays);
   const PixelMoments& at(std::uint32_t x, std::uint32_t y) const {
     return pixels_[static_cast<std::size_t>(y) * width_ + x];
   }

@@ -285,7 +285,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       push.pass = gpu::kPassList;
       push.tileSize = glm::uvec2(static_cast<std::uint32_t>(n), 1);
       push.param = lanes;
-      push.splitBase = samples + k / 2; // the pass's two halves, for the error estimate
+      push.splitBase = samples + firstHalf(k); // the pass's two halves, for the error estimate
       BandTimes t =
           submitBand(context_, timer_, "sampling", 0, settings.height, [&](const vk::raii::CommandBuffer& cmd) {
             cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
@@ -319,7 +319,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
       for (std::size_t j = 0; j < n; ++j) {
         std::uint32_t i = open[first + order[j]];
-        acc.add(i % width, i / width, sums[2 * j], sums[2 * j + 1], static_cast<double>(k / 2));
+        acc.add(i % width, i / width, sums[2 * j], sums[2 * j + 1]);
       }
       result.timings.readbackMs += msSince(readStart);
       first += n;
