@@ -23,7 +23,9 @@
 
 #include <gtest/gtest.h>
 
+#include "render/adaptive.h"
 #include "test_support.h"
+#include "util/host_memory.h"
 
 extern char** environ;
 
@@ -404,6 +406,29 @@ TEST_F(CliHardening, TheWidestImageStreamsThroughTheBandWindow) {
                   dir_, {cacheEnv_});
   ASSERT_EQ(r.exitCode, 0) << r.err;
   EXPECT_EQ(fs::file_size(out), std::string("PF\n16384 40\n-1.0\n").size() + 16384ull * 40 * 12);
+}
+
+// A progressive render keeps per-pixel sums on the host: at the largest size they need more memory
+// than most machines have, and the render is refused before it traces, in one line that says how
+// much, instead of ending in std::bad_alloc or the kernel's OOM killer. (Where the machine has the
+// 27 GiB, there is nothing to refuse and the test is skipped.)
+TEST_F(CliHardening, AProgressiveRenderTooLargeForHostMemoryIsRefused) {
+  const std::uint64_t needed = progressiveHostBytes(16384, 16384, 16384);
+  auto available = hostMemoryAvailable();
+  if (!available || *available >= needed) GTEST_SKIP() << "this machine has the memory";
+  fs::path out = dir_ / "out" / "huge.exr";
+  Outcome r = run({"render", scene("seed.json"), "-o", out.string(), "--width", "16384", "--height", "16384",
+                   "--noise-threshold", "0.01"},
+                  dir_, {cacheEnv_});
+  EXPECT_EQ(r.exitCode, 1) << "signal " << r.signal << "\n" << r.err;
+  EXPECT_EQ(lineCount(r.err), 1u) << r.err;
+  EXPECT_EQ(r.err.rfind("vkray: error: sampling progressively (a noise threshold, a time limit, or the spp, error or "
+                        "rays AOVs) at 16384x16384 keeps 27.0 GiB of per-pixel sums in host memory, and ",
+                        0),
+            0u)
+      << r.err;
+  EXPECT_TRUE(outputs().empty());
+  EXPECT_LT(r.maxRssKb, 2 * 1024 * 1024) << "refused after allocating";
 }
 
 // ---- Interrupts, kills and atomic output ---------------------------------------------------------

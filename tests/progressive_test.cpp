@@ -43,7 +43,7 @@ TEST(Progressive, OnePassErrorIsTheDifferenceOfItsHalvesMeansOverTwo) {
   // Unequal halves, n1 = 1, n2 = 2 (a pass of three): |A - B| sqrt(2) / 3.
   ProgressiveImage odd(1, 1);
   pass(odd, 0, {1, 0, 0});
-  EXPECT_NEAR(odd.error(0, 0), std::sqrt(2.0) / 3.0, 1e-15);
+  EXPECT_FLOAT_EQ(odd.error(0, 0), std::sqrt(2.0) / 3.0); // stored in float
 }
 
 TEST(Progressive, FourBlocksPooledWithThePreviousDecisionsEstimate) {
@@ -57,13 +57,13 @@ TEST(Progressive, FourBlocksPooledWithThePreviousDecisionsEstimate) {
   pass(img, 0, {0, 0});
   EXPECT_EQ(img.error(0, 0), 0.0);
   pass(img, 0, {1, 1});
-  EXPECT_DOUBLE_EQ(img.error(0, 0), std::sqrt(1.0 / 12.0));
+  EXPECT_FLOAT_EQ(img.error(0, 0), std::sqrt(1.0 / 12.0));
   pass(img, 0, {0, 0, 1, 1});
   double dof = 0.0;
   EXPECT_DOUBLE_EQ(blockVariance(img.at(0, 0), &dof), 1.0 / 12.0);
   EXPECT_EQ(dof, 3.0);
   EXPECT_EQ(img.at(0, 0).previousDof, 2.0);
-  EXPECT_NEAR(img.error(0, 0), std::sqrt(0.075), 1e-15);
+  EXPECT_FLOAT_EQ(img.error(0, 0), std::sqrt(0.075));
   // The blocks move on by a pass: before the pass before the last, 4 samples of mean 0.5.
   pass(img, 0, {0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5});
   EXPECT_EQ(img.at(0, 0).previousSamples, 4.0);
@@ -110,6 +110,62 @@ TEST(Progressive, NeighbourhoodDecidesWhoStaysOpen) {
   EXPECT_EQ(img.stillOpen(all, 0.2), (std::vector<std::uint32_t>{1, 2, 3}));
   // Only pixels open before can stay open.
   EXPECT_EQ(img.stillOpen({2}, 0.5), (std::vector<std::uint32_t>{2}));
+}
+
+// A tile's render stores only its rows (and margin): the same passes give the same estimates and
+// decisions as in the whole image, rows outside are black with no samples and no estimate.
+TEST(Progressive, RowsOfATileDecideAsInTheWholeImage) {
+  ProgressiveImage whole(3, 8), rows(3, 8, 3, 5);
+  auto addBoth = [&](std::uint32_t x, std::uint32_t y, const std::vector<double>& samples) {
+    glm::vec4 sums(0.0f), half(0.0f);
+    for (std::size_t i = 0; i < samples.size(); ++i) {
+      sums += glm::vec4(glm::vec3(static_cast<float>(samples[i]), 0.25f, 0.0f), 1.0f);
+      if (i < firstHalf(static_cast<std::uint32_t>(samples.size())))
+        half += glm::vec4(glm::vec3(static_cast<float>(samples[i]), 0.25f, 0.0f), 0.0f);
+    }
+    whole.add(x, y, sums, half + glm::vec4(0.0f, 0.0f, 0.0f, 3.0f));
+    rows.add(x, y, sums, half + glm::vec4(0.0f, 0.0f, 0.0f, 3.0f));
+  };
+  for (std::uint32_t y = 3; y < 5; ++y)
+    for (std::uint32_t x = 0; x < 3; ++x) addBoth(x, y, {0.1 * x, 0.2 * y, 0.3, 0.1 * (x + y)});
+  for (std::uint32_t y = 3; y < 5; ++y)
+    for (std::uint32_t x = 0; x < 3; ++x) {
+      EXPECT_EQ(rows.error(x, y), whole.error(x, y));
+      EXPECT_EQ(rows.neighbourhoodError(x, y), whole.neighbourhoodError(x, y));
+    }
+  const std::vector<std::uint32_t> open{9, 10, 11, 12, 13, 14};
+  EXPECT_EQ(rows.stillOpen(open, 0.05), whole.stillOpen(open, 0.05));
+  Image a = whole.image(), b = rows.image();
+  ASSERT_EQ(b.pixels.size(), 24u);
+  EXPECT_EQ(a.pixels, b.pixels);
+  EXPECT_EQ(b.pixels[0], glm::vec3(0.0f));
+  PixelStats s = rows.stats();
+  ASSERT_EQ(s.samples.size(), 24u);
+  EXPECT_EQ(s.samples[0], 0.0f);
+  EXPECT_TRUE(std::isinf(s.error[23]));
+  EXPECT_EQ(s.samples[9], 4.0f);
+  EXPECT_EQ(s.rays[14], 3.0f);
+}
+
+// The moments are kept in float: 72 bytes a pixel, 76 with its estimate (the 4K image's statistics
+// take 0.6 GiB; in double they took 1.2).
+TEST(Progressive, HostMemoryIsCountedAndTooMuchIsRefused) {
+  EXPECT_EQ(ProgressiveImage::kBytesPerPixel, 76u);
+  // Traced pixels: 76 + two list entries; every pixel: the means (12) and three statistics (12).
+  EXPECT_EQ(progressiveHostBytes(100, 50, 50), 5000u * (84 + 24));
+  EXPECT_EQ(progressiveHostBytes(100, 50, 10), 1000u * 84 + 5000u * 24);
+  const std::uint64_t gib = std::uint64_t{1} << 30;
+  EXPECT_NO_THROW(checkProgressiveMemory(16384, 16384, 16384, 64 * gib)); // 27 GiB
+  try {
+    checkProgressiveMemory(16384, 16384, 16384, 8 * gib);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_STREQ(e.what(), "sampling progressively (a noise threshold, a time limit, or the spp, error or rays AOVs) "
+                           "at 16384x16384 keeps 27.0 GiB of per-pixel sums in host memory, and 8.0 GiB is "
+                           "available: render fewer pixels, or in tiles (--tile I/N, then vkray merge)");
+  }
+  // A tile of 1024 rows and its margin: the moments of those rows, the means of the whole.
+  EXPECT_NO_THROW(checkProgressiveMemory(16384, 16384, 1040, 8 * gib));
 }
 
 TEST(Progressive, ThresholdScheduleDoublesUpToTheCap) {

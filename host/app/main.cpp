@@ -2,6 +2,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <exception>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -233,6 +234,10 @@ int main(int argc, char** argv) {
     return 130;
   } catch (const Error& e) {
     std::fprintf(stderr, "vkray: error: %s\n", e.what());
+    return 1;
+  } catch (const std::bad_alloc&) {
+    // What vkray can foresee it refuses before allocating (checkProgressiveMemory); this is the rest.
+    std::fprintf(stderr, "vkray: error: out of host memory\n");
     return 1;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "vkray: internal error: %s\n", e.what());

@@ -8,6 +8,7 @@
 
 #include "../../shaders/shared/resolve_types.h"
 #include "util/error.h"
+#include "util/host_memory.h"
 
 namespace vkray {
 
@@ -28,20 +29,22 @@ void checkProgressiveSettings(const RenderSettings& s) {
 
 double blockVariance(const PixelMoments& m, double* dof) {
   // The blocks as (sum, samples): earlier ones first, in the sequence's order.
-  const glm::dvec3 lastSum = m.sum - m.earlierSum;
-  const double lastSamples = m.samples - m.earlierSamples;
+  const glm::dvec3 sum(m.sum), earlierSum(m.earlierSum), previousSum(m.previousSum), halfSum(m.halfSum);
+  const double samples = m.samples, earlierSamples = m.earlierSamples, previousSamples = m.previousSamples;
+  const glm::dvec3 lastSum = sum - earlierSum;
+  const double lastSamples = samples - earlierSamples;
   const double halfSamples = firstHalf(static_cast<std::uint32_t>(lastSamples));
   const std::array<std::pair<glm::dvec3, double>, 4> blocks{{
-      {m.previousSum, m.previousSamples},
-      {m.earlierSum - m.previousSum, m.earlierSamples - m.previousSamples},
-      {m.halfSum, halfSamples},
-      {lastSum - m.halfSum, lastSamples - halfSamples},
+      {previousSum, previousSamples},
+      {earlierSum - previousSum, earlierSamples - previousSamples},
+      {halfSum, halfSamples},
+      {lastSum - halfSum, lastSamples - halfSamples},
   }};
   int count = 0;
   for (const auto& b : blocks) count += b.second > 0.0 ? 1 : 0;
   if (dof) *dof = std::max(0, count - 1);
   if (count < 2) return 0.0;
-  const glm::dvec3 mean = m.sum / m.samples;
+  const glm::dvec3 mean = sum / samples;
   double worst = 0.0;
   for (int c = 0; c < 3; ++c) {
     double squares = 0.0; // sum_j m_j (x_j - x)^2
@@ -50,7 +53,7 @@ double blockVariance(const PixelMoments& m, double* dof) {
       const double d = sum[c] / samples - mean[c];
       squares += samples * d * d;
     }
-    worst = std::max(worst, squares / (count - 1) / m.samples);
+    worst = std::max(worst, squares / (count - 1) / samples);
   }
   return worst;
 }
@@ -64,78 +67,88 @@ double standardError(const PixelMoments& m) {
   // (A stratified sequence converges faster than 1 / n, so it leans towards more samples.)
   const double pooled =
       m.previousDof > 0.0 && m.earlierSamples > 0.0
-          ? (dof * v + m.previousDof * m.previousVariance * (m.earlierSamples / m.samples)) / (dof + m.previousDof)
+          ? (dof * v + double(m.previousDof) * m.previousVariance * (double(m.earlierSamples) / m.samples)) /
+                (dof + m.previousDof)
           : v;
   return std::sqrt(pooled);
 }
 
-ProgressiveImage::ProgressiveImage(std::uint32_t width, std::uint32_t height)
-    : width_(width), height_(height), pixels_(static_cast<std::size_t>(width) * height),
-      errors_(pixels_.size(), std::numeric_limits<double>::infinity()) {}
+ProgressiveImage::ProgressiveImage(std::uint32_t width, std::uint32_t height, std::uint32_t rowBegin,
+                                   std::uint32_t rowEnd)
+    : width_(width), height_(height), rowBegin_(std::min(rowBegin, height)),
+      rowEnd_(std::clamp(rowEnd, rowBegin_, height)), pixels_(static_cast<std::size_t>(width) * (rowEnd_ - rowBegin_)),
+      errors_(pixels_.size(), std::numeric_limits<float>::infinity()) {}
 
 void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays) {
-  std::size_t i = static_cast<std::size_t>(y) * width_ + x;
+  const std::size_t i = index(x, y);
   PixelMoments& m = pixels_[i];
   // One call per pixel per pass: the blocks shift by one pass, and the estimate they gave so far
   // becomes the previous decision's.
-  m.previousVariance = blockVariance(m, &m.previousDof);
+  double dof = 0.0;
+  m.previousVariance = static_cast<float>(blockVariance(m, &dof));
+  m.previousDof = static_cast<float>(dof);
   m.previousSum = m.earlierSum;
   m.previousSamples = m.earlierSamples;
   m.earlierSum = m.sum;
   m.earlierSamples = m.samples;
-  m.sum += glm::dvec3(glm::vec3(sums));
+  m.sum += glm::vec3(sums);
   m.samples += sums.w;
-  m.halfSum = glm::dvec3(glm::vec3(halfAndRays));
+  m.halfSum = glm::vec3(halfAndRays);
   m.rays += halfAndRays.w;
-  errors_[i] = standardError(m);
+  errors_[i] = static_cast<float>(standardError(m));
 }
 
 double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) const {
   const std::uint32_t x0 = x > 0 ? x - 1 : 0, x1 = std::min(width_ - 1, x + 1);
-  const std::uint32_t y0 = y > 0 ? y - 1 : 0, y1 = std::min(height_ - 1, y + 1);
+  const std::uint32_t y0 = y > rowBegin_ ? y - 1 : rowBegin_, y1 = std::min(rowEnd_ - 1, y + 1);
   double sum = 0.0;
   int count = 0;
   for (std::uint32_t v = y0; v <= y1; ++v) {
     for (std::uint32_t u = x0; u <= x1; ++u) {
       // A neighbour never traced (outside the rendered rows) has no say.
-      const std::size_t j = static_cast<std::size_t>(v) * width_ + u;
-      if (pixels_[j].samples <= 0.0) continue;
-      sum += errors_[j] * errors_[j];
+      const std::size_t j = index(u, v);
+      if (pixels_[j].samples <= 0.0f) continue;
+      sum += double(errors_[j]) * errors_[j];
       ++count;
     }
   }
   if (count == 0) return std::numeric_limits<double>::infinity();
-  const double own = errors_[static_cast<std::size_t>(y) * width_ + x];
+  const double own = errors_[index(x, y)];
   return std::sqrt(kOwnShare * own * own + (1.0 - kOwnShare) * sum / count);
 }
 
 std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::uint32_t>& open, double threshold) const {
   std::vector<std::uint32_t> next;
   for (std::uint32_t i : open) {
-    if (pixels_[i].samples < 2.0 || !(neighbourhoodError(i % width_, i / width_) <= threshold)) next.push_back(i);
+    const std::uint32_t x = i % width_, y = i / width_;
+    if (pixels_[index(x, y)].samples < 2.0f || !(neighbourhoodError(x, y) <= threshold)) next.push_back(i);
   }
   return next;
 }
 
 Image ProgressiveImage::image() const {
   Image img(width_, height_);
+  const std::size_t offset = static_cast<std::size_t>(rowBegin_) * width_;
   for (std::size_t i = 0; i < pixels_.size(); ++i) {
     const PixelMoments& m = pixels_[i];
-    img.pixels[i] = m.samples > 0.0 ? glm::vec3(m.sum / m.samples) : glm::vec3(0.0f);
+    img.pixels[offset + i] = m.samples > 0.0f ? glm::vec3(glm::dvec3(m.sum) / double(m.samples)) : glm::vec3(0.0f);
   }
   return img;
 }
 
 PixelStats ProgressiveImage::stats() const {
   PixelStats s;
-  s.samples.resize(pixels_.size());
-  s.error.resize(pixels_.size());
-  s.rays.resize(pixels_.size());
+  const std::size_t all = static_cast<std::size_t>(width_) * height_;
+  // Outside the stored rows: no samples, no rays, and no estimate (+inf, as an EXR layer shows it).
+  s.samples.assign(all, 0.0f);
+  s.error.assign(all, std::numeric_limits<float>::infinity());
+  s.rays.assign(all, 0.0f);
+  const std::size_t offset = static_cast<std::size_t>(rowBegin_) * width_;
   for (std::size_t i = 0; i < pixels_.size(); ++i) {
-    s.samples[i] = static_cast<float>(pixels_[i].samples);
-    // A pixel with one sample (or none) has no estimate: +inf, as an EXR layer shows it.
-    s.error[i] = static_cast<float>(errors_[i]);
-    s.rays[i] = static_cast<float>(pixels_[i].rays);
+    s.samples[offset + i] = pixels_[i].samples;
+    // A pixel with one sample (or none) has no estimate: +inf.
+    s.error[offset + i] = errors_[i];
+    s.rays[offset + i] = pixels_[i].rays;
   }
   return s;
 }
@@ -177,6 +190,24 @@ std::uint32_t decisionCount(const RenderSettings& s) {
     if (samples >= static_cast<std::uint32_t>(s.minSpp)) ++decisions;
   }
   return decisions;
+}
+
+std::uint64_t progressiveHostBytes(std::uint32_t width, std::uint32_t height, std::uint32_t tracedRows) {
+  const std::uint64_t traced = std::uint64_t{width} * tracedRows, all = std::uint64_t{width} * height;
+  // Per traced pixel: its moments and estimate, and its entry in the open list and the next one.
+  // Per pixel of the image: the means (vec3) and the statistics (samples, error, rays).
+  return traced * (ProgressiveImage::kBytesPerPixel + 2 * sizeof(std::uint32_t)) +
+         all * (sizeof(glm::vec3) + 3 * sizeof(float));
+}
+
+void checkProgressiveMemory(std::uint32_t width, std::uint32_t height, std::uint32_t tracedRows,
+                            std::uint64_t available) {
+  const std::uint64_t needed = progressiveHostBytes(width, height, tracedRows);
+  if (needed <= available) return;
+  throw Error("sampling progressively (a noise threshold, a time limit, or the spp, error or rays AOVs) at " +
+              std::to_string(width) + "x" + std::to_string(height) + " keeps " + formatBytes(needed) +
+              " of per-pixel sums in host memory, and " + formatBytes(available) +
+              " is available: render fewer pixels, or in tiles (--tile I/N, then vkray merge)");
 }
 
 ProgressiveSummary summarize(const PixelStats& stats, int passes) {

@@ -41,21 +41,24 @@ constexpr std::uint32_t firstHalf(std::uint32_t k) {
   return k / 2;
 }
 
-// One pixel's running sums, in double: the host adds each pass's float sums to them.
+// One pixel's running sums: the host adds each pass's sums to them.
 struct PixelMoments {
-  glm::dvec3 sum{0.0};
-  double samples = 0.0;
-  double rays = 0.0;
-  glm::dvec3 earlierSum{0.0}; // sum and samples before the last pass
-  double earlierSamples = 0.0;
-  glm::dvec3 previousSum{0.0}; // before the pass before the last
-  double previousSamples = 0.0;
-  glm::dvec3 halfSum{0.0}; // the last pass's first half (firstHalf of its samples)
+  // Stored in float (72 bytes a pixel; the estimate's arithmetic is in double): a pass's sums come
+  // from the kernel in float, and the few passes a pixel takes add little rounding to them.
+  glm::vec3 sum{0.0f};
+  float samples = 0.0f;
+  glm::vec3 earlierSum{0.0f}; // sum and samples before the last pass
+  float earlierSamples = 0.0f;
+  glm::vec3 previousSum{0.0f}; // before the pass before the last
+  float previousSamples = 0.0f;
+  glm::vec3 halfSum{0.0f}; // the last pass's first half (firstHalf of its samples)
+  float rays = 0.0f;
   // What blockVariance gave before the last pass (the variance of the mean of earlierSamples), and
   // its degrees of freedom (0: none).
-  double previousVariance = 0.0;
-  double previousDof = 0.0;
+  float previousVariance = 0.0f;
+  float previousDof = 0.0f;
 };
+static_assert(sizeof(PixelMoments) == 72);
 
 // The blocks' estimate of the variance of the pixel's mean, the largest of R, G and B: the blocks
 // are all before the pass before the last, that pass, and the last pass's two halves (empty ones
@@ -70,18 +73,22 @@ double blockVariance(const PixelMoments& m, double* dof = nullptr);
 // Infinite below two samples or without two blocks.
 double standardError(const PixelMoments& m);
 
+// The running sums of the pixels in rows [rowBegin, rowEnd) of a width x height image (a tile's
+// rows and its margin; all rows by default): the host adds each pass's sums to them. Coordinates
+// are the image's; pixels outside the rows are never traced.
 class ProgressiveImage {
 public:
-  ProgressiveImage(std::uint32_t width, std::uint32_t height);
+  ProgressiveImage(std::uint32_t width, std::uint32_t height, std::uint32_t rowBegin = 0, std::uint32_t rowEnd = ~0u);
+  // The host memory one stored pixel takes (its moments and its estimate).
+  static constexpr std::size_t kBytesPerPixel = sizeof(PixelMoments) + sizeof(float);
   std::uint32_t width() const { return width_; }
   std::uint32_t height() const { return height_; }
   // Adds one pass's sums of a pixel: (sum rgb, samples) and (sum rgb of the pass's first
   // firstHalf(samples) samples, rays).
   void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays);
-  const PixelMoments& at(std::uint32_t x, std::uint32_t y) const {
-    return pixels_[static_cast<std::size_t>(y) * width_ + x];
-  }
-  double error(std::uint32_t x, std::uint32_t y) const { return errors_[static_cast<std::size_t>(y) * width_ + x]; }
+  const PixelMoments& at(std::uint32_t x, std::uint32_t y) const { return pixels_[index(x, y)]; }
+  // standardError, as stored (in float).
+  double error(std::uint32_t x, std::uint32_t y) const { return errors_[index(x, y)]; }
   // The pixel's error as the threshold judges it: the root of kOwnShare of its own squared
   // standardError plus the rest of the mean square over its 3 x 3 neighbourhood (pixels traced so
   // far). One estimate has a few degrees of freedom per channel, so the neighbourhood steadies it;
@@ -91,14 +98,27 @@ public:
   double neighbourhoodError(std::uint32_t x, std::uint32_t y) const;
   // Of `open` (row-major pixel indices), those whose neighbourhood error is above `threshold`.
   std::vector<std::uint32_t> stillOpen(const std::vector<std::uint32_t>& open, double threshold) const;
-  Image image() const; // the means (black where a pixel has no samples)
+  Image image() const; // the whole image's means (black where a pixel has no samples)
   PixelStats stats() const;
 
 private:
-  std::uint32_t width_, height_;
+  std::size_t index(std::uint32_t x, std::uint32_t y) const {
+    return static_cast<std::size_t>(y - rowBegin_) * width_ + x;
+  }
+  std::uint32_t width_, height_, rowBegin_, rowEnd_;
   std::vector<PixelMoments> pixels_;
-  std::vector<double> errors_; // standardError of each pixel, updated by add()
+  std::vector<float> errors_; // standardError of each pixel, updated by add()
 };
+
+// Host memory a progressive render of a width x height image keeps while it runs, with the rows it
+// traces (`tracedRows`: a tile's and its margin): the moments of those rows, the open lists, and
+// the whole image's means and statistics.
+std::uint64_t progressiveHostBytes(std::uint32_t width, std::uint32_t height, std::uint32_t tracedRows);
+
+// Throws Error when `needed` bytes exceed `available` (the host's, hostMemoryAvailable), saying
+// what needs them and how to need less.
+void checkProgressiveMemory(std::uint32_t width, std::uint32_t height, std::uint32_t tracedRows,
+                            std::uint64_t available);
 
 // The samples each open pixel gets in the next pass. `samplesSoFar`: each open pixel's count (all
 // open pixels have the same); msPerSample: GPU time per pixel-sample measured so far (0: none yet);

@@ -10,6 +10,7 @@
 #include "render/descriptors.h"
 #include "util/clock.h"
 #include "util/error.h"
+#include "util/host_memory.h"
 
 namespace vkray {
 
@@ -217,7 +218,9 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   const std::uint32_t margin = settings.noiseThreshold > 0.0 && tile ? decisionCount(settings) : 0;
   const std::uint32_t traceBegin = rowBegin > margin ? rowBegin - margin : 0;
   const std::uint32_t traceEnd = std::min(settings.height, rowEnd + margin);
-  ProgressiveImage acc(width, settings.height);
+  if (auto available = hostMemoryAvailable())
+    checkProgressiveMemory(width, settings.height, traceEnd - traceBegin, *available);
+  ProgressiveImage acc(width, settings.height, traceBegin, traceEnd);
   // The list in the order the sample pass's lanes take pixels: 8 x 8 tiles, row by row, each in
   // 4 x 2 blocks (camera.glsl, invocationPixel), so eight neighbouring list entries are a compact
   // block of the image while they are all open, and their rays walk the same BVH nodes.
