@@ -26,6 +26,7 @@
 #include "scene/mesh_import.h"
 #include "scene/scene_limits.h"
 #include "scene/scene_loader.h"
+#include "util/atomic_file.h"
 #include "util/error.h"
 #include "vk/context.h"
 
@@ -497,6 +498,27 @@ TEST(HardeningOutput, StaleTemporariesOfDeadWritersAreRemoved) {
   std::size_t files = 0;
   for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++files;
   EXPECT_EQ(files, 3u) << "the write left its own temporary file";
+  fs::remove_all(dir);
+}
+
+// The caches (pipeline cache, folded SPIR-V) write the same way, quietly: a failed write returns
+// false and leaves nothing, and a killed process's temporary goes on the next write, as above.
+TEST(HardeningOutput, CacheWritesAreAtomicQuietAndCleanUpAfterDeadWriters) {
+  fs::path dir = test::freshScratchDir("quiet");
+  pid_t dead = ::fork();
+  if (dead == 0) ::_exit(0);
+  ASSERT_GT(dead, 0);
+  ::waitpid(dead, nullptr, 0);
+  const std::string deadName = ".cache.bin.tmp-" + std::to_string(dead) + "-a1b2c3";
+  std::ofstream(dir / deadName) << "partial";
+  const std::vector<std::uint8_t> bytes{1, 2, 3, 4};
+  EXPECT_TRUE(writeFileAtomicQuietly(dir / "cache.bin", bytes));
+  EXPECT_FALSE(fs::exists(dir / deadName)) << "a dead writer's temporary file was kept";
+  EXPECT_EQ(fs::file_size(dir / "cache.bin"), 4u);
+  EXPECT_FALSE(writeFileAtomicQuietly(dir / "missing" / "cache.bin", bytes));
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++files;
+  EXPECT_EQ(files, 1u) << "a write left its temporary file";
   fs::remove_all(dir);
 }
 

@@ -1,4 +1,4 @@
-// PNG/PFM encoding and decoding, and atomic file writes.
+// PNG/PFM encoding and decoding; writes go through writeFileAtomic (util/atomic_file.h).
 #include "image/image_io.h"
 
 #include <algorithm>
@@ -112,75 +112,6 @@ std::vector<std::uint8_t> encodePfm(const Image& image) {
   }
   static_assert(sizeof(glm::vec3) == 12);
   return out;
-}
-
-namespace {
-
-// A write to NAME goes through ".NAME.tmp-PID-XXXXXX" in the same directory. A process killed
-// between creating and renaming it (SIGKILL, power loss) leaves that hidden file behind; the next
-// write to NAME removes those whose PID no longer runs. A live writer's file is never touched.
-std::string temporaryPrefix(const fs::path& path) {
-  // Appended piece by piece: GCC 12 warns (-Wstringop-overflow, a false positive) on "." + string.
-  std::string prefix = ".";
-  prefix += path.filename().string();
-  prefix += ".tmp-";
-  return prefix;
-}
-
-void removeStaleTemporaries(const fs::path& dir, const fs::path& path) {
-  const std::string prefix = temporaryPrefix(path);
-  std::error_code ec;
-  for (fs::directory_iterator it(dir, ec), end; !ec && it != end; it.increment(ec)) {
-    std::string name = it->path().filename().string();
-    if (name.rfind(prefix, 0) != 0) continue;
-    const char* digits = name.c_str() + prefix.size();
-    char* rest = nullptr;
-    long pid = std::strtol(digits, &rest, 10);
-    if (rest == digits || *rest != '-' || pid <= 0) continue;
-    // ESRCH: no such process. EPERM means it runs under another user: keep its file.
-    if (::kill(static_cast<pid_t>(pid), 0) == 0 || errno != ESRCH) continue;
-    ::unlink(it->path().c_str());
-  }
-}
-
-} // namespace
-
-void writeFileAtomic(const fs::path& path, const std::vector<std::uint8_t>& bytes) {
-  fs::path dir = path.parent_path();
-  if (dir.empty()) dir = ".";
-  removeStaleTemporaries(dir, path);
-  std::string tmpl = (dir / (temporaryPrefix(path) + std::to_string(::getpid()) + "-XXXXXX")).string();
-  std::vector<char> name(tmpl.begin(), tmpl.end());
-  name.push_back('\0');
-  int fd = ::mkstemp(name.data());
-  if (fd < 0) throw InputError(path.string(), std::string("cannot create a file here: ") + std::strerror(errno));
-  auto fail = [&](const char* what) {
-    int err = errno;
-    ::close(fd);
-    ::unlink(name.data());
-    throw InputError(path.string(), std::string(what) + ": " + std::strerror(err));
-  };
-  std::size_t done = 0;
-  while (done < bytes.size()) {
-    ssize_t n = ::write(fd, bytes.data() + done, bytes.size() - done);
-    if (n < 0) {
-      if (errno == EINTR) continue;
-      fail("cannot write");
-    }
-    done += static_cast<std::size_t>(n);
-  }
-  if (::fsync(fd) != 0) fail("cannot flush to disk");
-  ::fchmod(fd, 0644);
-  if (::close(fd) != 0) {
-    int err = errno;
-    ::unlink(name.data());
-    throw InputError(path.string(), std::string("cannot close: ") + std::strerror(err));
-  }
-  if (::rename(name.data(), path.c_str()) != 0) {
-    int err = errno;
-    ::unlink(name.data());
-    throw InputError(path.string(), std::string("cannot replace: ") + std::strerror(err));
-  }
 }
 
 void writeImage(const fs::path& path, const Image& image, const ImageWriteOptions& options) {

@@ -10,6 +10,7 @@
 
 #include "image/exr_io.h"
 #include "image/image.h"
+#include "util/atomic_file.h" // writeFileAtomic
 
 namespace vkray {
 
@@ -34,8 +35,5 @@ struct ImageWriteOptions {
 
 void writeImage(const std::filesystem::path& path, const Image& image, const ImageWriteOptions& options = {});
 Image readImage(const std::filesystem::path& path); // PNG decoded to linear, PFM or EXR
-
-// Writes bytes to path atomically (temp file + fsync + rename). Throws InputError naming the path.
-void writeFileAtomic(const std::filesystem::path& path, const std::vector<std::uint8_t>& bytes);
 
 } // namespace vkray

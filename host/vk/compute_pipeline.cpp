@@ -8,8 +8,7 @@
 #include <iterator>
 #include <vector>
 
-#include <unistd.h>
-
+#include "util/atomic_file.h"
 #include "vk/context.h"
 #include "vk/fold_cache.h"
 #include "vk/spirv_fold.h"
@@ -106,19 +105,7 @@ void PipelineCache::save() const {
     std::vector<std::uint8_t> data = cache_.getData();
     std::error_code ec;
     std::filesystem::create_directories(file_.parent_path(), ec);
-    auto tmp = file_;
-    tmp += ".tmp" + std::to_string(::getpid());
-    {
-      std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-      if (!out) return;
-      out.write(reinterpret_cast<const char*>(data.data()), static_cast<std::streamsize>(data.size()));
-      if (!out) {
-        std::filesystem::remove(tmp, ec);
-        return;
-      }
-    }
-    std::filesystem::rename(tmp, file_, ec);
-    if (ec) std::filesystem::remove(tmp, ec);
+    writeFileAtomicQuietly(file_, data);
   } catch (...) {
   }
 }

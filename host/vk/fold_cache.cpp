@@ -2,7 +2,6 @@
 #include "vk/fold_cache.h"
 
 #include <algorithm>
-#include <atomic>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
@@ -10,8 +9,8 @@
 #include <system_error>
 
 #include <spirv-tools/libspirv.h>
-#include <unistd.h>
 
+#include "util/atomic_file.h"
 #include "util/fnv_hash.h"
 #include "vk/compute_pipeline.h"
 #include "vk/spirv_fold.h"
@@ -85,30 +84,14 @@ std::vector<std::uint32_t> FoldCache::load(std::uint64_t key) const {
 
 void FoldCache::store(std::uint64_t key, std::span<const std::uint32_t> folded) const {
   if (dir_.empty() || folded.empty()) return;
-  static std::atomic<unsigned> counter{0};
   std::error_code ec;
   std::filesystem::create_directories(dir_, ec);
   if (ec) return;
-  const std::filesystem::path file = fileFor(key);
-  std::filesystem::path tmp = file;
-  tmp += ".tmp" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) return;
-    const Header h{kMagic, kFormat, key, folded.size(), hashWords(folded)};
-    out.write(reinterpret_cast<const char*>(&h), sizeof h);
-    out.write(reinterpret_cast<const char*>(folded.data()), static_cast<std::streamsize>(folded.size_bytes()));
-    if (!out) {
-      out.close();
-      std::filesystem::remove(tmp, ec);
-      return;
-    }
-  }
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    return;
-  }
+  const Header h{kMagic, kFormat, key, folded.size(), hashWords(folded)};
+  std::vector<std::uint8_t> bytes(sizeof h + folded.size_bytes());
+  std::memcpy(bytes.data(), &h, sizeof h);
+  std::memcpy(bytes.data() + sizeof h, folded.data(), folded.size_bytes());
+  if (!writeFileAtomicQuietly(fileFor(key), bytes)) return;
   evict();
 }
 
