@@ -5,8 +5,11 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
+#include <fstream>
 #include <limits>
 #include <numeric>
+#include <optional>
 
 #include <gtest/gtest.h>
 
@@ -14,6 +17,7 @@
 #include "scene/scene_loader.h"
 #include "test_support.h"
 #include "util/error.h"
+#include "util/host_memory.h"
 
 namespace vkray::test {
 namespace {
@@ -166,6 +170,36 @@ TEST(Progressive, HostMemoryIsCountedAndTooMuchIsRefused) {
   }
   // A tile of 1024 rows and its margin: the moments of those rows, the means of the whole.
   EXPECT_NO_THROW(checkProgressiveMemory(16384, 16384, 1040, 8 * gib));
+}
+
+// A container's memory limit is not in MemAvailable: the room under the control group's limit counts
+// too, from cgroup v2's or v1's files, in the group's own directory or (namespaced) the root's.
+TEST(Progressive, RoomUnderAControlGroupsMemoryLimit) {
+  namespace fs = std::filesystem;
+  const fs::path root = test::freshScratchDir("cgroup");
+  auto put = [&](const fs::path& file, const std::string& text) {
+    fs::create_directories(file.parent_path());
+    std::ofstream(file) << text << "\n";
+  };
+  put(root / "memory.max", "max");
+  put(root / "memory.current", "100");
+  put(root / "a/b/memory.max", "1000");
+  put(root / "a/b/memory.current", "400");
+  EXPECT_EQ(cgroupMemoryRoom(root, "0::/a/b\n"), std::optional<std::uint64_t>(600));
+  EXPECT_EQ(cgroupMemoryRoom(root, "0::/\n"), std::nullopt) << "\"max\" is no limit";
+  put(root / "memory/x/memory.limit_in_bytes", "5000");
+  put(root / "memory/x/memory.usage_in_bytes", "1000");
+  put(root / "memory/memory.limit_in_bytes", "9223372036854771712"); // v1's "no limit"
+  put(root / "memory/memory.usage_in_bytes", "1000");
+  EXPECT_EQ(cgroupMemoryRoom(root, "5:cpu:/x\n4:memory:/x\n0::/\n"), std::optional<std::uint64_t>(4000));
+  EXPECT_EQ(cgroupMemoryRoom(root, "3:cpu,memory:/x\n"), std::optional<std::uint64_t>(4000));
+  EXPECT_EQ(cgroupMemoryRoom(root, "4:memory:/not-here\n"), std::nullopt) << "the root's, unlimited";
+  put(root / "memory/memory.limit_in_bytes", "800");
+  EXPECT_EQ(cgroupMemoryRoom(root, "4:memory:/not-here\n"), std::optional<std::uint64_t>(0)) << "over the limit";
+  EXPECT_EQ(cgroupMemoryRoom(root, ""), std::nullopt);
+  EXPECT_EQ(formatBytes(3ull << 29), "1.5 GiB");
+  EXPECT_EQ(formatBytes(312ull << 20), "312 MiB");
+  fs::remove_all(root);
 }
 
 TEST(Progressive, ThresholdScheduleDoublesUpToTheCap) {
