@@ -467,5 +467,38 @@ TEST_F(Cli, AccuracyBenchQuickWritesACsvAndPlots) {
   EXPECT_NE(report.find("Within noise"), std::string::npos);
   EXPECT_NE(report.find("Pareto front"), std::string::npos);
 }
+
+// bench adaptive prints, per threshold, the uniform spp and time at the same 95th-percentile error,
+// the time ratio, and that ratio as the product of its three factors: samples, rays per sample and
+// time per ray (each the threshold's over uniform sampling's).
+TEST_F(Cli, AdaptiveBenchSplitsTheRatioIntoItsFactors) {
+  RunResult r = vkray("bench adaptive '" + std::string(VKRAY_SOURCE_DIR) +
+                      "/scenes/showcase.json' --height 48 --runs 1 --thresholds 0.016 --max-uniform-spp 64 "
+                      "--reference-spp 256");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  std::istringstream lines(r.out);
+  std::string line;
+  bool header = false;
+  int rows = 0;
+  while (std::getline(lines, line)) {
+    if (line.rfind("threshold ", 0) == 0) {
+      header = true;
+      EXPECT_NE(line.find("ratio  samples   rays/spp   ms/ray"), std::string::npos) << line;
+      continue;
+    }
+    if (!header || line.rfind("E ", 0) != 0) continue;
+    ++rows;
+    // E 0.016  spp  p95  rays  ms [min, max]  uniform-spp  uniform-ms  ratio  samples  rays/spp  ms/ray
+    std::istringstream f(line.substr(2));
+    double e, spp, p95, rays, ms, uSpp, uMs, ratio, samples, perSample, perRay;
+    std::string lo, hi;
+    ASSERT_TRUE(f >> e >> spp >> p95 >> rays >> ms >> lo >> hi >> uSpp >> uMs >> ratio >> samples >> perSample >>
+                perRay)
+        << line;
+    EXPECT_NEAR(samples, spp / uSpp, 0.006) << line;
+    EXPECT_NEAR(ratio, samples * perSample * perRay, 0.02 + 0.01 * ratio) << line; // printed to 2 decimals
+  }
+  EXPECT_EQ(rows, 1) << r.out;
+}
 } // namespace
 } // namespace vkray::test

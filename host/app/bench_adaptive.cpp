@@ -125,20 +125,26 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
                   static_cast<unsigned long long>(p.rays), median(p.ms), *std::min_element(p.ms.begin(), p.ms.end()),
                   *std::max_element(p.ms.begin(), p.ms.end()));
     }
-    std::printf("%-12s %9s %10s %12s %24s %14s %12s %7s\n", "threshold", "spp mean", "p95 error", "rays", "trace ms",
-                "uniform spp", "uniform ms", "ratio");
+    std::printf("%-12s %9s %10s %12s %24s %14s %12s %7s %8s %10s %8s\n", "threshold", "spp mean", "p95 error", "rays",
+                "trace ms", "uniform spp", "uniform ms", "ratio", "samples", "rays/spp", "ms/ray");
     for (const Point& p : adaptive) {
       const double ms = median(p.ms);
       const double uSpp =
           interpolate(uniform, p.p95, [](const Point& u) { return static_cast<double>(u.settings.spp); });
       const double uMs = interpolate(uniform, p.p95, [](const Point& u) { return median(u.ms); });
-      std::printf("%-12s %9.1f %10.5f %12llu %10.2f [%.2f, %.2f] %14.1f %12.2f %7.2f\n", p.label.c_str(), p.sppMean,
-                  p.p95, static_cast<unsigned long long>(p.rays), ms, *std::min_element(p.ms.begin(), p.ms.end()),
-                  *std::max_element(p.ms.begin(), p.ms.end()), uSpp, uMs, ms / uMs);
+      const double uRays = interpolate(uniform, p.p95, [](const Point& u) { return static_cast<double>(u.rays); });
+      // The time ratio as the product of three: samples, rays per sample, time per ray.
+      const double samples = p.sppMean / uSpp;
+      const double raysRatio = static_cast<double>(p.rays) / uRays;
+      std::printf("%-12s %9.1f %10.5f %12llu %10.2f [%.2f, %.2f] %14.1f %12.2f %7.2f %8.2f %10.2f %8.2f\n",
+                  p.label.c_str(), p.sppMean, p.p95, static_cast<unsigned long long>(p.rays), ms,
+                  *std::min_element(p.ms.begin(), p.ms.end()), *std::max_element(p.ms.begin(), p.ms.end()), uSpp, uMs,
+                  ms / uMs, samples, raysRatio / samples, (ms / uMs) / raysRatio);
     }
   }
   std::printf("\nratio: the threshold's median trace time over uniform sampling's at the same 95th-percentile error "
-              "(nan: outside the uniform points' range)\n");
+              "(nan: outside the uniform points' range); it is the product of the last three: samples (the "
+              "threshold's mean spp over uniform's), rays/spp and ms/ray (each the threshold's over uniform's)\n");
   return 0;
 }
 
