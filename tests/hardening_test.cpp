@@ -477,14 +477,27 @@ TEST(HardeningFuzz, FindingsStayFixed) {
 
 // ---- Outputs -------------------------------------------------------------------------------------
 
+// The PID of a process that has ended (forked, exited and reaped), for a dead writer's temporary
+// file; -1 if fork failed.
+pid_t finishedProcess() {
+  const pid_t pid = ::fork();
+  if (pid == 0) ::_exit(0);
+  if (pid > 0) ::waitpid(pid, nullptr, 0);
+  return pid;
+}
+
+std::size_t filesIn(const fs::path& dir) {
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++files;
+  return files;
+}
+
 // A process killed between creating its temporary output and renaming it leaves a hidden
 // ".NAME.tmp-PID-XXXXXX"; the next write to NAME removes it, and leaves live writers' files alone.
 TEST(HardeningOutput, StaleTemporariesOfDeadWritersAreRemoved) {
   fs::path dir = test::freshScratchDir("stale");
-  pid_t dead = ::fork();
-  if (dead == 0) ::_exit(0);
+  const pid_t dead = finishedProcess();
   ASSERT_GT(dead, 0);
-  ::waitpid(dead, nullptr, 0);
   const std::string deadName = ".out.png.tmp-" + std::to_string(dead) + "-a1b2c3";
   const std::string liveName = ".out.png.tmp-" + std::to_string(::getpid()) + "-d4e5f6";
   const std::string otherName = ".other.png.tmp-" + std::to_string(dead) + "-g7h8i9";
@@ -495,9 +508,7 @@ TEST(HardeningOutput, StaleTemporariesOfDeadWritersAreRemoved) {
   EXPECT_TRUE(fs::exists(dir / liveName)) << "a live writer's temporary file was removed";
   EXPECT_TRUE(fs::exists(dir / otherName)) << "another output's temporary file was removed";
   EXPECT_EQ(fs::file_size(dir / "out.png"), 3u);
-  std::size_t files = 0;
-  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++files;
-  EXPECT_EQ(files, 3u) << "the write left its own temporary file";
+  EXPECT_EQ(filesIn(dir), 3u) << "the write left its own temporary file";
   fs::remove_all(dir);
 }
 
@@ -505,10 +516,8 @@ TEST(HardeningOutput, StaleTemporariesOfDeadWritersAreRemoved) {
 // false and leaves nothing, and a killed process's temporary goes on the next write, as above.
 TEST(HardeningOutput, CacheWritesAreAtomicQuietAndCleanUpAfterDeadWriters) {
   fs::path dir = test::freshScratchDir("quiet");
-  pid_t dead = ::fork();
-  if (dead == 0) ::_exit(0);
+  const pid_t dead = finishedProcess();
   ASSERT_GT(dead, 0);
-  ::waitpid(dead, nullptr, 0);
   const std::string deadName = ".cache.bin.tmp-" + std::to_string(dead) + "-a1b2c3";
   std::ofstream(dir / deadName) << "partial";
   const std::vector<std::uint8_t> bytes{1, 2, 3, 4};
@@ -516,9 +525,7 @@ TEST(HardeningOutput, CacheWritesAreAtomicQuietAndCleanUpAfterDeadWriters) {
   EXPECT_FALSE(fs::exists(dir / deadName)) << "a dead writer's temporary file was kept";
   EXPECT_EQ(fs::file_size(dir / "cache.bin"), 4u);
   EXPECT_FALSE(writeFileAtomicQuietly(dir / "missing" / "cache.bin", bytes));
-  std::size_t files = 0;
-  for ([[maybe_unused]] const auto& e : fs::directory_iterator(dir)) ++files;
-  EXPECT_EQ(files, 1u) << "a write left its temporary file";
+  EXPECT_EQ(filesIn(dir), 1u) << "a write left its temporary file";
   fs::remove_all(dir);
 }
 
