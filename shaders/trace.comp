@@ -66,12 +66,13 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
   PendingRay stack[STACK_SIZE];
   int sp = 0;
   PendingRay cur = PendingRay(origin, kRayEye << 16u, dir, vec3(1.0), kEmptyMedia);
-  // TEXTURES: the ray cone (Ray Tracing Gems ch. 20) as the distance the tree has travelled to the
-  // current ray's origin: the eye ray's spread angle is kept through reflections and refractions
-  // (flat surfaces; the curvature of spheres is left out), so the cone's width at a hit is the
-  // spread times the whole path. Outside PendingRay, so without TEXTURES nothing of it is compiled.
-  float travelled = 0.0;
-  float travelledStack[STACK_SIZE];
+  // TEXTURES: the current ray's cone (Ray Tracing Gems ch. 20) as x, its width at the ray's origin,
+  // and y, its spread angle (radians: width gained per unit distance; negative while it converges).
+  // The eye ray's starts at the pinhole with the pixel's angle; each surface passes its width on and
+  // bends the spread by its curvature (coneAfterReflection, coneAfterRefraction). Outside
+  // PendingRay, so without TEXTURES nothing of it is compiled.
+  vec2 cone = vec2(0.0, frame.coneSpread);
+  vec2 coneStack[STACK_SIZE];
   uint maxDepth = opaqueUniform(frame.maxDepth);
   // The loop's own exit leaves nothing pending. A tree cut short, by the ray budget below or by a
   // driver's loop limit (Mesa 22's llvmpipe ends every loop of an invocation once its SIMD group has
@@ -119,12 +120,21 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
       bool front = dot(s.ng, cur.dir) < 0.0;
       vec3 ngf = front ? s.ng : -s.ng;
       vec3 nsf = front ? s.ns : -s.ns;
-      if (TEXTURES) gConeFootprint = frame.coneSpread * (travelled + hit.t) / max(abs(dot(s.ng, cur.dir)), 1e-6);
+      // The cone's width where it meets the surface (through a focus, a converging cone widens again),
+      // and the surface's curvature as the ray sees it: positive where the surface bulges towards it.
+      float coneWidth = 0.0;
+      float curvature = 0.0;
+      if (TEXTURES) {
+        coneWidth = abs(cone.x + cone.y * hit.t);
+        curvature = front ? s.curvature : -s.curvature;
+        gConeFootprint = coneWidth / max(abs(dot(s.ng, cur.dir)), 1e-6);
+      }
       radiance += w * localShade(mat, s, ngf, nsf, cur.dir);
 
       if ((REFLECTION || REFRACTION) && depth < maxDepth) {
         float kr = reflectance(mat);
         float kt = 0.0;
+        float eta = 1.0; // n1 / n2 at a dielectric
         vec3 tdir = vec3(0.0);
         uvec2 tmedia = cur.media;
         if (REFRACTION && transmittance(mat) > 0.0) {
@@ -144,6 +154,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           kr += trans * split.fresnel;
           kt = trans * (1.0 - split.fresnel);
           tdir = split.refracted;
+          eta = n1 / n2;
         }
         vec3 wr = w * kr;
         bool doR = worthTracing(wr);
@@ -158,6 +169,8 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           if (RECORD_TREE) treeAddCuts(record, !doT && maxComponent(wt) > 0.0 ? kTreeCutRefractionBailout : 0u);
         }
         uint nextDepth = depth + 1u;
+        vec2 reflectedCone = vec2(0.0);
+        if (TEXTURES) reflectedCone = coneAfterReflection(cone.y, coneWidth, curvature);
         PendingRay reflected;
         if (doR) {
           vec3 ro = ROBUST ? spawnOrigin(s.p, ngf, s.errorBound) : s.p;
@@ -168,7 +181,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
           vec3 to = ROBUST ? spawnOrigin(s.p, -ngf, s.errorBound) : s.p;
           if (doR) {
             if (sp < STACK_SIZE) {
-              if (TEXTURES) travelledStack[sp] = travelled + hit.t;
+              if (TEXTURES) coneStack[sp] = reflectedCone;
               if (RECORD_TREE) parentStack[sp] = record;
               stack[sp++] = reflected;
             } else {
@@ -177,13 +190,14 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
             }
           }
           cur = PendingRay(to, nextDepth | (kRayRefraction << 16u), tdir, wt, tmedia);
+          if (TEXTURES) cone = coneAfterRefraction(cone.y, coneWidth, curvature, eta);
           haveNext = true;
         } else if (doR) {
           cur = reflected;
+          if (TEXTURES) cone = reflectedCone;
           haveNext = true;
         }
         if (RECORD_TREE) parent = record;
-        if (TEXTURES) travelled += hit.t;
       } else if (RECORD_TREE) {
         // At the depth cap: the branches this surface would have had.
         bool branches = (REFLECTION || REFRACTION) && (reflectance(mat) > 0.0 || transmittance(mat) > 0.0);
@@ -193,7 +207,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
     if (!haveNext) {
       // Without refraction nothing is ever pushed: the stack code compiles out.
       if (!REFRACTION || sp == 0) break;
-      if (TEXTURES) travelled = travelledStack[sp - 1];
+      if (TEXTURES) cone = coneStack[sp - 1];
       if (RECORD_TREE) parent = parentStack[sp - 1];
       cur = stack[--sp];
       haveNext = true;

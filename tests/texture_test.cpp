@@ -19,6 +19,7 @@
 
 #include "image/image_io.h"
 #include "image/metrics.h"
+#include "numerics_support.h"
 #include "render/gpu_scene.h"
 #include "render/kernel_variants.h"
 #include "scene/features.h"
@@ -530,6 +531,188 @@ TEST(RenderTexture, MinFilterLinearEqualsTheBilinearFilter) {
   // ... while the default minFilter, trilinear, does not (the test can tell them apart).
   tex->minFilter = TextureMinFilter::Trilinear;
   EXPECT_GT(compareImages(render(s).image, bilinear).maxAbs, 0.05);
+}
+
+// Ray cones through curved surfaces. A 65 x 65 image, so the middle pixel's single sample is the
+// optical axis; a square wall of side `side` with a 256 x 256 texture whose level k is the flat grey
+// (k + 1) / 16, so trilinear filtering shows the level of detail as the grey: r = (lod + 1) / 16,
+// with lod = log2(cone width at the wall x 256 / side) on the axis (the wall faces the ray).
+// The expected width comes from paraxial ray-transfer (ABCD) matrices in double precision, applied
+// to the cone's edge ray (half its width off the axis, at half its spread angle): the textbook
+// optics that shaders/lib/texture.glsl's cone rules are written from, followed through the whole
+// path, against the kernel's own ray tree.
+struct ParaxialRay {
+  double h = 0.0; // height off the axis
+  double u = 0.0; // angle to the axis (positive: away from it)
+  void travel(double t) { h += u * t; }
+  // A surface of curvature k (positive: bulging towards the ray) between indices n1 and n2.
+  void refract(double k, double n1, double n2) { u = (n1 / n2) * u + (n1 / n2 - 1.0) * k * h; }
+  // A mirror of curvature k, unfolded: the reflected ray continues along the axis.
+  void reflect(double k) { u = u + 2.0 * k * h; }
+};
+
+constexpr int kConeImage = 65;
+constexpr double kConeFovY = 30.0;
+
+double pixelAngle() {
+  return std::atan(2.0 * std::tan(glm::radians(kConeFovY) / 2.0) / kConeImage);
+}
+
+Scene coneScene() {
+  Scene s;
+  s.camera.position = {0.0, 0.0, 0.0};
+  s.camera.lookAt = {0.0, 0.0, -1.0};
+  s.camera.fovY = kConeFovY;
+  s.render.width = kConeImage;
+  s.render.height = kConeImage;
+  s.render.spp = 1;
+  s.render.textureFilter = TextureFilter::Cone;
+  s.ambientLight = glm::dvec3(1.0);
+  auto tex = std::make_shared<Texture>();
+  TextureLevel l;
+  l.width = 256;
+  l.height = 256;
+  l.texels.assign(256 * 256, glm::vec4(1.0f));
+  tex->levels = buildMipChain(l);
+  for (std::size_t k = 0; k < tex->levels.size(); ++k) {
+    for (auto& t : tex->levels[k].texels) t = glm::vec4(glm::vec3(float(k + 1) / 16.0f), 1.0f);
+  }
+  s.textures.push_back(tex);
+  Material wall; // material 0: the textured wall, ambient only
+  wall.color = glm::dvec3(1.0);
+  wall.ambient = 1.0;
+  wall.diffuse = 0.0;
+  wall.baseColorTexture = MaterialTexture{};
+  s.materials.push_back(wall);
+  Material mirror; // material 1
+  mirror.ambient = mirror.diffuse = 0.0;
+  mirror.reflection = 1.0;
+  s.materials.push_back(mirror);
+  Material glass; // material 2
+  glass.ambient = glass.diffuse = 0.0;
+  glass.transmission = 1.0;
+  glass.ior = 1.5;
+  s.materials.push_back(glass);
+  return s;
+}
+
+// The wall: a square of side `side` centred on the axis in the plane z, facing the direction `facing`
+// (+1 or -1 along z), uv from 0 to 1 across it.
+void addWall(Scene& s, double z, double side, double facing) {
+  const double h = side / 2.0;
+  glm::dvec3 p[4] = {{-h, -h, z}, {h, -h, z}, {h, h, z}, {-h, h, z}};
+  glm::dvec4 uv[4] = {{0, 0, 0, 0}, {1, 0, 0, 0}, {1, 1, 0, 0}, {0, 1, 0, 0}};
+  auto corners = facing > 0 ? std::array<std::array<int, 3>, 2>{{{0, 1, 2}, {0, 2, 3}}}
+                            : std::array<std::array<int, 3>, 2>{{{0, 2, 1}, {0, 3, 2}}};
+  for (auto [a, b, c] : corners) {
+    Triangle t;
+    t.v[0] = p[a];
+    t.v[1] = p[b];
+    t.v[2] = p[c];
+    t.uvs = std::array<glm::dvec4, 3>{uv[a], uv[b], uv[c]};
+    t.material = 0;
+    s.triangles.push_back(t);
+  }
+}
+
+double middleGrey(const Scene& s) {
+  const Image image = render(s).image;
+  return image.pixels[(kConeImage / 2) * kConeImage + kConeImage / 2].r;
+}
+
+double greyForWidth(double width, double side) {
+  return (std::log2(width * 256.0 / side) + 1.0) / 16.0;
+}
+
+TEST(RenderTexture, ConesWidenAtConvexMirrorsAndNarrowInGlass) {
+  const double alpha = pixelAngle();
+  const double d = 4.0, radius = 1.0, behind = 4.0;
+  // A flat mirror (the plane z = -d) keeps the cone's spread: the width grows with the whole path.
+  {
+    Scene s = coneScene();
+    s.render.maxDepth = 1;
+    s.planes.push_back(Plane{{0, 0, 1}, d, 1});
+    const double side = 8.0;
+    addWall(s, behind, side, -1.0); // behind the eye, which does not block rays
+    ParaxialRay edge{0.0, alpha / 2.0};
+    edge.travel(d);
+    edge.reflect(0.0);
+    edge.travel(d + behind);
+    const double expected = greyForWidth(2.0 * edge.h, side);
+    EXPECT_NEAR(middleGrey(s), expected, 0.002) << "flat mirror, lod " << expected * 16.0 - 1.0;
+  }
+  // A convex mirror (a sphere of radius 1 whose front is d - 1 away) spreads it by 2 w / R.
+  {
+    Scene s = coneScene();
+    s.render.maxDepth = 1;
+    s.spheres.push_back(Sphere{{0, 0, -d}, radius, 1});
+    const double side = 8.0;
+    addWall(s, behind, side, -1.0);
+    ParaxialRay edge{0.0, alpha / 2.0};
+    edge.travel(d - radius);
+    edge.reflect(1.0 / radius);
+    edge.travel(d - radius + behind);
+    const double expected = greyForWidth(2.0 * edge.h, side);
+    const double withoutCurvature = greyForWidth(alpha * (2.0 * (d - radius) + behind), side);
+    ASSERT_GT(expected - withoutCurvature, 2.0 / 16.0); // the curvature is worth two levels here
+    EXPECT_NEAR(middleGrey(s), expected, 0.002) << "convex mirror, lod " << expected * 16.0 - 1.0;
+  }
+  // A glass ball is a converging lens: the cone narrows towards the image of the eye behind it.
+  // Fresnel reflection at normal incidence takes ((n - 1) / (n + 1))^2 at each surface; depth 2
+  // leaves out the rays reflected inside the ball.
+  {
+    Scene s = coneScene();
+    s.render.maxDepth = 2;
+    s.spheres.push_back(Sphere{{0, 0, -d}, radius, 2});
+    const double side = 2.0;
+    addWall(s, -d - radius - behind, side, 1.0);
+    ParaxialRay edge{0.0, alpha / 2.0};
+    edge.travel(d - radius);
+    edge.refract(1.0 / radius, 1.0, 1.5);
+    edge.travel(2.0 * radius);
+    edge.refract(-1.0 / radius, 1.5, 1.0);
+    edge.travel(behind);
+    const double f = (0.5 / 2.5) * (0.5 / 2.5);
+    const double expected = (1.0 - f) * (1.0 - f) * greyForWidth(2.0 * std::abs(edge.h), side);
+    const double straight = (1.0 - f) * (1.0 - f) * greyForWidth(alpha * (d + radius + behind), side);
+    ASSERT_GT(straight - expected, 0.5 / 16.0); // and about a level here
+    EXPECT_NEAR(middleGrey(s), expected, 0.002) << "glass ball, lod " << expected * 16.0 / 0.9216 - 1.0;
+  }
+}
+
+// Mesh triangles take their curvature from their vertex normals: a tessellated ball with radial
+// normals mirrors the wall as the analytic sphere does (the level within 0.06 of the sphere's; the
+// facets' hit points lie up to 0.001 radius inside the sphere, and the shading normal bends the
+// reflected axis a little), and the same ball shaded flat, as a flat mirror at its facet would.
+TEST(RenderTexture, AMeshBallWithRadialNormalsMirrorsLikeTheSphere) {
+  const double alpha = pixelAngle();
+  const double d = 4.0, radius = 1.0, behind = 4.0, side = 8.0;
+  const test::numerics::Mesh ball = test::numerics::icosphere(glm::dvec3(0.0, 0.0, -d), radius, 4);
+  auto ballScene = [&](bool smooth) {
+    Scene s = coneScene();
+    s.render.maxDepth = 1;
+    addWall(s, behind, side, -1.0);
+    for (const auto& f : ball.faces) {
+      Triangle t;
+      std::array<glm::dvec3, 3> normals;
+      for (int i = 0; i < 3; ++i) {
+        t.v[i] = glm::dvec3(ball.vertices[f[i]]);
+        normals[i] = glm::normalize(t.v[i] - glm::dvec3(0.0, 0.0, -d));
+      }
+      if (smooth) t.normals = normals;
+      t.material = 1;
+      s.triangles.push_back(t);
+    }
+    return s;
+  };
+  ParaxialRay edge{0.0, alpha / 2.0};
+  edge.travel(d - radius);
+  edge.reflect(1.0 / radius);
+  edge.travel(d - radius + behind);
+  const double sphere = greyForWidth(2.0 * edge.h, side);
+  EXPECT_NEAR(middleGrey(ballScene(true)), sphere, 0.004) << "lod " << sphere * 16.0 - 1.0;
+  const double flat = greyForWidth(alpha * (2.0 * (d - radius) + behind), side);
+  EXPECT_NEAR(middleGrey(ballScene(false)), flat, 0.004) << "lod " << flat * 16.0 - 1.0;
 }
 
 } // namespace

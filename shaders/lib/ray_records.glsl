@@ -31,6 +31,7 @@ struct Surface {
   bool hasUv;       // a triangle with texture coordinates
   vec4 uv;          // xy: set 0, zw: set 1
   vec2 uvLodBias;   // 0.5 log2(uv area / world area) of the triangle, sets 0 and 1
+  float curvature;  // of the surface along ng, per unit length: 1 / radius for spheres, 0 for flat ones
   vec3 vertexColor; // VERTEX_COLORS only: interpolated COLOR_0 (1 elsewhere)
 };
 

@@ -12,6 +12,25 @@
 // The ray cone's footprint at the hit being shaded: width / |n.d| (trace.comp sets it).
 float gConeFootprint = 0.0;
 
+// The cones of the rays a surface sends on: (width at their origin, spread angle). `width` is the
+// incoming cone's where it met the surface, `spread` its spread angle, `curvature` the surface's as
+// the ray sees it (1 / radius where it bulges towards the ray, negative where it is hollow, 0 when
+// flat). Paraxially: the cone's edge ray, w/2 off its axis, meets a normal tilted by curvature * w/2.
+// - A mirror turns that tilt twice: spread + 2 curvature width. (At incidence angle theta the
+//   footprint is w / cos(theta) long in the plane of incidence, where the reflection turns by
+//   2 curvature w / cos(theta), and w across it, where it turns by 2 curvature w cos(theta); their
+//   geometric mean, used here, keeps the footprint's area, which is what the level of detail reads.)
+// - Snell's law for small angles, with eta = n1 / n2: eta spread + (eta - 1) curvature width; a
+//   glass ball (convex going in, hollow coming out, eta < 1 then > 1) makes it converge.
+// RenderTexture.ConesWidenAtConvexMirrorsAndNarrowInGlass checks both against a double-precision model.
+vec2 coneAfterReflection(float spread, float width, float curvature) {
+  return vec2(width, spread + 2.0 * curvature * width);
+}
+
+vec2 coneAfterRefraction(float spread, float width, float curvature, float eta) {
+  return vec2(width, eta * spread + (eta - 1.0) * curvature * width);
+}
+
 // uv into [0, 1] by the wrap mode (the repeat and mirror periods taken in float, before any integer
 // conversion, so huge uv cannot overflow).
 float wrapAxis(float u, uint mode) {
