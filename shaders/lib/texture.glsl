@@ -23,12 +23,17 @@ float gConeFootprint = 0.0;
 // - Snell's law for small angles, with eta = n1 / n2: eta spread + (eta - 1) curvature width; a
 //   glass ball (convex going in, hollow coming out, eta < 1 then > 1) makes it converge.
 // RenderTexture.ConesWidenAtConvexMirrorsAndNarrowInGlass checks both against a double-precision model.
+// The spread is kept within a half-turn either way: a wider cone already picks the coarsest level
+// from its first unit of travel, and a finite bound keeps the sums finite where a sliver triangle's
+// vertex normals give an enormous curvature (an infinite spread would meet an opposite one as NaN).
+const float kMaxConeSpread = 3.14159265;
+
 vec2 coneAfterReflection(float spread, float width, float curvature) {
-  return vec2(width, spread + 2.0 * curvature * width);
+  return vec2(width, clamp(spread + 2.0 * curvature * width, -kMaxConeSpread, kMaxConeSpread));
 }
 
 vec2 coneAfterRefraction(float spread, float width, float curvature, float eta) {
-  return vec2(width, eta * spread + (eta - 1.0) * curvature * width);
+  return vec2(width, clamp(eta * spread + (eta - 1.0) * curvature * width, -kMaxConeSpread, kMaxConeSpread));
 }
 
 // uv into [0, 1] by the wrap mode (the repeat and mirror periods taken in float, before any integer
