@@ -1,9 +1,11 @@
 // The viewer's convergence pass (host/viewer/convergence.h): each pixel's estimated standard error
 // while samples accumulate, and its reduction to the figures the overlay shows. The estimate is
-// of the kind render --noise-threshold makes (host/render/adaptive.cpp, blockVariance), from two
-// blocks where the headless passes have four: the mean A of the pixel's n1 earlier samples (the
-// sums' copy taken when the count last doubled) against the mean B of the n2 since; with
-// independent halves var(mean) = (A - B)^2 n1 n2 / n^2, the largest of R, G and B.
+// render --noise-threshold's (host/render/adaptive.cpp, blockVariance), from three blocks where the
+// headless passes have four: the pixel's samples before the copy of the sums taken the time before
+// last that the count doubled, those between the two copies, and those since the last copy. With
+// blocks of m_j samples and means x_j, var(mean) = sum_j m_j (x_j - x)^2 / (J - 1) / n, the
+// largest of R, G and B; before the second copy the first block is empty, and two halves give
+// (A - B)^2 n1 n2 / n^2.
 #version 450
 #extension GL_GOOGLE_include_directive : require
 #extension GL_KHR_shader_subgroup_arithmetic : require
@@ -20,6 +22,7 @@ layout(constant_id = kConvergenceSpecThreshold) const float THRESHOLD = 0.01;
 // Texel buffers: one 16-byte load per lane on lavapipe, where a storage buffer's vec4 is a loop.
 layout(binding = kConvergenceBindingSums, rgba32f) uniform readonly restrict imageBuffer sums;
 layout(binding = kConvergenceBindingHalf, rgba32f) uniform readonly restrict imageBuffer earlier;
+layout(binding = kConvergenceBindingEarliest, rgba32f) uniform readonly restrict imageBuffer earliest;
 layout(binding = kConvergenceBindingErrors, r32f) uniform restrict imageBuffer errors;
 layout(std430, binding = kConvergenceBindingHistogram) restrict buffer Histogram { uint words[]; };
 layout(push_constant) uniform Push { uvec2 size; } pc;
@@ -28,14 +31,26 @@ layout(push_constant) uniform Push { uvec2 size; } pc;
 // host reads it as +inf (ConvergenceMeter::readErrors).
 const float kNoEstimate = 3.402823466e+38;
 
+// One block's share of sum_j m_j (x_j - x)^2: `sum` of `count` samples against the overall mean.
+vec3 blockSquares(vec3 sum, float count, vec3 mean) {
+  if (!(count > 0.0)) return vec3(0.0);
+  vec3 d = sum / count - mean;
+  return count * d * d;
+}
+
 float estimate(int i) {
   vec4 s = imageLoad(sums, i);
   vec4 h = imageLoad(earlier, i);
-  float n = s.w, n1 = h.w, n2 = s.w - h.w;
+  vec4 q = imageLoad(earliest, i);
+  float n = s.w;
   // No copy yet, or no sample since it (or a copy from before a restart): no estimate.
-  if (!(n1 > 0.0 && n2 > 0.0)) return kNoEstimate;
-  vec3 d = abs(h.rgb / n1 - (s.rgb - h.rgb) / n2);
-  return max(d.r, max(d.g, d.b)) * sqrt(n1 * n2) / n;
+  if (!(h.w > 0.0 && n > h.w)) return kNoEstimate;
+  vec3 mean = s.rgb / n;
+  vec3 squares = blockSquares(q.rgb, q.w, mean) + blockSquares(h.rgb - q.rgb, h.w - q.w, mean) +
+                 blockSquares(s.rgb - h.rgb, n - h.w, mean);
+  float blocks = q.w > 0.0 ? 3.0 : 2.0;
+  vec3 v = squares / ((blocks - 1.0) * n);
+  return sqrt(max(v.r, max(v.g, v.b)));
 }
 
 void main() {

@@ -560,6 +560,43 @@ TEST_F(Viewer, TheConvergedShareIsTheHeadlessRuleOnTheErrorMap) {
   EXPECT_NEAR(statValue(r.out, "converged"), share, 0.07) << r.out;
 }
 
+// The error map is the three-block estimate of the frames' samples. After 6 frames the viewer has
+// copied the sums at 1, 2 and 4 samples and keeps the last two copies, so the blocks are samples
+// [0, 2), [2, 4) and [4, 6). Viewer frames are the headless render's samples bit for bit, so
+// headless renders at 2, 4 and 6 spp give each block's mean (from the means times their counts,
+// in double), and sigma^2 = sum_j m_j (x_j - x)^2 / ((3 - 1) n), the largest channel. Float sums
+// on the GPU against double on the host: within 0.1 % where the estimate is above 1e-3.
+TEST_F(Viewer, TheErrorMapIsTheThreeBlockEstimateOfTheFrames) {
+  const std::string size = "--width 64 --height 48";
+  Image estimates = view(scene("showcase.json"), size + " --no-ray-counts --frames 6 --display error", "error.pfm");
+  Image u2 = render(scene("showcase.json"), size + " --spp 2", "u2.pfm");
+  Image u4 = render(scene("showcase.json"), size + " --spp 4", "u4.pfm");
+  Image u6 = render(scene("showcase.json"), size + " --spp 6", "u6.pfm");
+  ASSERT_EQ(estimates.pixels.size(), u6.pixels.size());
+  std::size_t compared = 0;
+  for (std::size_t i = 0; i < u6.pixels.size(); ++i) {
+    const glm::dvec3 s2 = 2.0 * glm::dvec3(u2.pixels[i]), s4 = 4.0 * glm::dvec3(u4.pixels[i]),
+                     s6 = 6.0 * glm::dvec3(u6.pixels[i]);
+    const glm::dvec3 mean = s6 / 6.0;
+    const std::array<glm::dvec3, 3> blocks{s2 / 2.0, (s4 - s2) / 2.0, (s6 - s4) / 2.0};
+    double worst = 0.0;
+    for (int c = 0; c < 3; ++c) {
+      double squares = 0.0;
+      for (const glm::dvec3& b : blocks) squares += 2.0 * (b[c] - mean[c]) * (b[c] - mean[c]);
+      worst = std::max(worst, squares / (2.0 * 6.0));
+    }
+    const double expected = std::sqrt(worst);
+    const double got = estimates.pixels[i].x;
+    if (expected > 1e-3) {
+      EXPECT_NEAR(got, expected, 1e-3 * expected) << "pixel " << i;
+      ++compared;
+    } else {
+      EXPECT_NEAR(got, expected, 2e-6) << "pixel " << i;
+    }
+  }
+  EXPECT_GT(compared, 100u) << "the showcase has noisy pixels at 6 samples";
+}
+
 // The cost map counts the rays each pixel traced (eye, shadow, reflection, refraction) per sample.
 // The left half of the view is a mirror, whose pixels also trace a reflection ray and the shadow ray
 // of what it shows (a lit wall behind the camera); the right half is a lit diffuse wall (an eye ray

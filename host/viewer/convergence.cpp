@@ -30,7 +30,8 @@ ConvergenceMeter::ConvergenceMeter(const vulkan::Context& context, vulkan::Pipel
                                    {{gpu::kConvergenceBindingSums, T::eStorageTexelBuffer},
                                     {gpu::kConvergenceBindingHalf, T::eStorageTexelBuffer},
                                     {gpu::kConvergenceBindingErrors, T::eStorageTexelBuffer},
-                                    {gpu::kConvergenceBindingHistogram, T::eStorageBuffer}},
+                                    {gpu::kConvergenceBindingHistogram, T::eStorageBuffer},
+                                    {gpu::kConvergenceBindingEarliest, T::eStorageTexelBuffer}},
                                    sizeof(glm::uvec2));
     vk::raii::DescriptorSets sets = layout_.allocate();
     set_ = std::move(sets.front());
@@ -69,9 +70,13 @@ void ConvergenceMeter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent
   if (resized) {
     const vk::DeviceSize pixels = static_cast<vk::DeviceSize>(size.width) * size.height;
     half_.reset();
+    earliest_.reset();
     errors_.reset();
     half_ = std::make_unique<vulkan::Buffer>(context_, pixels * sizeof(glm::vec4), vk::Format::eR32G32B32A32Sfloat,
                                              vulkan::MemoryUse::DeviceLocal, "sums when the count last doubled");
+    earliest_ =
+        std::make_unique<vulkan::Buffer>(context_, pixels * sizeof(glm::vec4), vk::Format::eR32G32B32A32Sfloat,
+                                         vulkan::MemoryUse::DeviceLocal, "sums when the count doubled before that");
     // Also a storage buffer: the resolve pass reads the error map's values as words.
     errors_ = std::make_unique<vulkan::Buffer>(context_, pixels * sizeof(float), vk::Format::eR32Sfloat,
                                                vulkan::MemoryUse::DeviceLocal, "error estimates",
@@ -81,9 +86,9 @@ void ConvergenceMeter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent
     threshold_ = threshold;
     buildPipelines();
   }
-  vk::BufferView views[] = {sumsView, half_->texelView(), errors_->texelView()};
+  vk::BufferView views[] = {sumsView, half_->texelView(), errors_->texelView(), earliest_->texelView()};
   vk::DescriptorBufferInfo histogram(histogram_->handle(), 0, VK_WHOLE_SIZE);
-  std::array<vk::WriteDescriptorSet, 4> writes{
+  std::array<vk::WriteDescriptorSet, 5> writes{
       vk::WriteDescriptorSet(*set_, gpu::kConvergenceBindingSums, 0, 1, vk::DescriptorType::eStorageTexelBuffer,
                              nullptr, nullptr, &views[0]),
       vk::WriteDescriptorSet(*set_, gpu::kConvergenceBindingHalf, 0, 1, vk::DescriptorType::eStorageTexelBuffer,
@@ -91,7 +96,9 @@ void ConvergenceMeter::bind(vk::Buffer sums, vk::BufferView sumsView, vk::Extent
       vk::WriteDescriptorSet(*set_, gpu::kConvergenceBindingErrors, 0, 1, vk::DescriptorType::eStorageTexelBuffer,
                              nullptr, nullptr, &views[2]),
       vk::WriteDescriptorSet(*set_, gpu::kConvergenceBindingHistogram, 0, 1, vk::DescriptorType::eStorageBuffer,
-                             nullptr, &histogram)};
+                             nullptr, &histogram),
+      vk::WriteDescriptorSet(*set_, gpu::kConvergenceBindingEarliest, 0, 1, vk::DescriptorType::eStorageTexelBuffer,
+                             nullptr, nullptr, &views[3])};
   context_.device().updateDescriptorSets(writes, {});
   copied_ = 0;
 }
@@ -111,8 +118,9 @@ void ConvergenceMeter::record(const vk::raii::CommandBuffer& cmd, std::uint32_t 
                         Access::eShaderRead | Access::eShaderWrite | Access::eTransferRead | Access::eTransferWrite);
   cmd.pipelineBarrier(stages, stages, {}, all, {}, {});
   if (restarted) {
-    // No copy since the restart: zero samples in it, so every pixel reads as not estimated yet.
+    // No copies since the restart: zero samples in them, so every pixel reads as not estimated yet.
     cmd.fillBuffer(half_->handle(), 0, VK_WHOLE_SIZE, 0u);
+    cmd.fillBuffer(earliest_->handle(), 0, VK_WHOLE_SIZE, 0u);
     cmd.pipelineBarrier(stages, stages, {}, all, {}, {});
   }
   const glm::uvec2 size(size_.width, size_.height);
@@ -133,10 +141,13 @@ void ConvergenceMeter::record(const vk::raii::CommandBuffer& cmd, std::uint32_t 
     measuredSamples_ = samples;
   }
   if (copy) {
-    // After the estimate, which still compares with the previous copy.
+    // After the estimate, which still compares with the previous copies; the last copy moves down a
+    // place (on the first after a restart it is the fill's zeros), then the sums are copied.
     if (estimate) cmd.pipelineBarrier(stages, stages, {}, all, {}, {});
-    cmd.copyBuffer(sums_, half_->handle(),
-                   vk::BufferCopy(0, 0, static_cast<vk::DeviceSize>(size_.width) * size_.height * sizeof(glm::vec4)));
+    const vk::BufferCopy whole(0, 0, static_cast<vk::DeviceSize>(size_.width) * size_.height * sizeof(glm::vec4));
+    cmd.copyBuffer(half_->handle(), earliest_->handle(), whole);
+    cmd.pipelineBarrier(stages, stages, {}, all, {}, {});
+    cmd.copyBuffer(sums_, half_->handle(), whole);
     copied_ = samples;
   }
   // The estimates and the copy before the resolve pass and the next frame's passes.

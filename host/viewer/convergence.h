@@ -1,12 +1,13 @@
 // The viewer's estimate of how far its accumulating image is from converged, on the GPU
 // (shaders/convergence.comp). The frames add samples uniformly; when the count per pixel has doubled
-// since the last copy, the sums are copied (a buffer copy), so that the samples since then and the
-// copy are two halves of each pixel's samples: render --noise-threshold's split-half standard error
-// (host/render/adaptive.cpp) follows per pixel. A second step reduces the estimates to a histogram
-// of their logarithm and the count of pixels converged at the threshold (the mean estimate over the
-// 3 x 3 neighbourhood at most the threshold, as the headless progressive passes decide), read back
-// by the host twice a second; the figures' cost is that pass's, and the copy's when the count
-// doubles (docs/viewer.md has the measurements).
+// since the last copy, the sums are copied (a buffer copy) and the copy before moves down a place,
+// so that the two copies and the sums split each pixel's samples in three blocks (at a count n
+// between copies at c and 2c: c/2, c/2 and n - c samples): render --noise-threshold's block
+// estimate of the standard error (host/render/adaptive.cpp, four blocks there) follows per pixel. A second step reduces
+// the estimates to a histogram of their logarithm and the count of pixels converged at the threshold (the mean estimate
+// over the 3 x 3 neighbourhood at most the threshold, as the headless progressive passes decide), read back by the host
+// twice a second; the figures' cost is that pass's, and the copy's when the count doubles (docs/viewer.md has the
+// measurements).
 #pragma once
 
 #include <cstdint>
@@ -67,6 +68,7 @@ private:
   std::unique_ptr<vulkan::ComputePipeline> estimate_;
   std::unique_ptr<vulkan::ComputePipeline> reduce_;
   std::unique_ptr<vulkan::Buffer> half_;      // the sums when the count last doubled (RGBA32F texels)
+  std::unique_ptr<vulkan::Buffer> earliest_;  // the copy before that (zero samples until there is one)
   std::unique_ptr<vulkan::Buffer> errors_;    // the estimates (R32F texels)
   std::unique_ptr<vulkan::Buffer> histogram_; // kHistogramWords, read by the host
   vk::Buffer sums_;

@@ -371,8 +371,8 @@ OverlayRequests Overlay::build(const OverlayModel& m, ViewSettings& settings) {
     ImGui::EndChild();
   }
   if (ImGui::CollapsingHeader("Convergence", ImGuiTreeNodeFlags_DefaultOpen)) {
-    // The split-half estimate of each pixel's standard error (convergence.h), linear, the largest of
-    // R, G and B; converged: the 3 x 3 neighbourhood's mean estimate is at most the threshold.
+    // The block estimate of each pixel's standard error (convergence.h), linear, the largest of
+    // R, G and B; converged: 0.8 of its own square and 0.2 of its 3 x 3 mean square at most the threshold squared.
     const ConvergenceFigures& c = m.convergence;
     if (!c.measured) {
       ImGui::TextDisabled("error: measuring...");

@@ -27,7 +27,7 @@ struct EffectToggles {
 constexpr std::uint32_t kRayCountEvery = 16;
 
 // What the window shows (M cycles, --display): the image, or a map of a per-pixel quantity as a heat
-// colour on a log scale: the estimated standard error of the pixel's mean (the split-half estimate of
+// colour on a log scale: the estimated standard error of the pixel's mean (the block estimate of
 // render --noise-threshold, host/viewer/convergence.h), or the rays traced per sample (cost).
 enum class DisplayMode { Image, Error, Cost };
 template <> struct EnumNames<DisplayMode> {

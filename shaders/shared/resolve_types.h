@@ -26,17 +26,18 @@ VKRAY_CONST(uint, kResolveSpecDisplay, 2u); // kDisplay*
 VKRAY_CONST(uint, kResolveSpecMapLow, 3u);  // float: the value shown at the scale's bottom (blue)
 VKRAY_CONST(uint, kResolveSpecMapHigh, 4u); // float: the value shown at its top (red)
 VKRAY_CONST(uint, kDisplayImage, 0u);
-VKRAY_CONST(uint, kDisplayError, 1u); // the split-half standard error (shaders/convergence.comp)
+VKRAY_CONST(uint, kDisplayError, 1u); // the block estimate of the standard error (shaders/convergence.comp)
 VKRAY_CONST(uint, kDisplayCost, 2u);  // rays traced per sample (Renderer's rays per pixel / samples)
 
 // ---- The convergence pass (shaders/convergence.comp, host/viewer/convergence.h) -----------------
-// Step 0 estimates each pixel's standard error from the sums and their copy taken when the sample
-// count last doubled; step 1 bins the estimates and counts the pixels whose 3 x 3 neighbourhood's
+// Step 0 estimates each pixel's standard error from the sums and their copies taken the last two
+// times the sample count doubled (three blocks of the pixel's samples); step 1 bins the estimates and counts the pixels whose 3 x 3 neighbourhood's
 // mean estimate is at most the threshold. Workgroups are image rows, as the resolve pass's.
 VKRAY_CONST(uint, kConvergenceBindingSums, 0u);      // storage texel buffer (RGBA32F): the sums now
 VKRAY_CONST(uint, kConvergenceBindingHalf, 1u);      // storage texel buffer (RGBA32F): their earlier copy
 VKRAY_CONST(uint, kConvergenceBindingErrors, 2u);    // storage texel buffer (R32F): the estimates
 VKRAY_CONST(uint, kConvergenceBindingHistogram, 3u); // uint[kHistogramWords]: the reduction (below)
+VKRAY_CONST(uint, kConvergenceBindingEarliest, 4u);  // storage texel buffer (RGBA32F): the copy before that
 VKRAY_CONST(uint, kConvergenceSpecStep, 0u);         // 0: estimate; 1: reduce
 VKRAY_CONST(uint, kConvergenceSpecGroupX, 1u);       // the workgroup's width
 VKRAY_CONST(uint, kConvergenceSpecThreshold, 2u);    // float: the noise threshold
