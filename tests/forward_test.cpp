@@ -226,9 +226,11 @@ TEST(RenderForward, ATimeLimitStopsWithinOneBatch) {
   RenderResult r = render(s, o);
   EXPECT_GT(r.forward.photonsPerLight, 0u);
   EXPECT_GE(r.forward.batches, 2);
-  // Batches are sized to end within the budget from the speed measured so far: the total stays
-  // within the limit plus one batch's budget (and timer noise).
-  EXPECT_LT(r.timings.traceMs, 300.0 + 2.0 * 50.0) << r.forward.batches << " batches";
+  // Batches are sized to end within the budget from the speed measured so far, so none starts once
+  // the limit is spent: the total stays within the limit plus the last batch. (Not plus the batch's
+  // planned 50 ms: on a loaded machine a batch can take longer than the speed measured before it.)
+  EXPECT_GT(r.forward.lastBatchMs, 0.0);
+  EXPECT_LE(r.timings.traceMs, 300.0 + r.forward.lastBatchMs) << r.forward.batches << " batches";
   expectNoValidationMessages();
 }
 

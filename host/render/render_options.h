@@ -156,6 +156,7 @@ struct ForwardSummary {
   std::uint64_t rays = 0;      // every ray the photons traced
   std::uint64_t nonFinite = 0; // contributions dropped as NaN/Inf (expected 0)
   int batches = 0;
+  double lastBatchMs = 0.0; // GPU time of the last batch (a time limit holds within it)
   double struckFraction() const { return emitted > 0 ? static_cast<double>(struck) / emitted : 0.0; }
 };
 

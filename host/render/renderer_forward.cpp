@@ -132,6 +132,7 @@ RenderResult Renderer::renderForward(const Camera& camera, const RenderSettings&
     result.timings.traceMs += t.gpuMs;
     result.timings.traceWallMs += t.wallMs;
     result.timings.bands++;
+    summary.lastBatchMs = t.gpuMs;
     double ms = t.gpuMs > 0.0 ? t.gpuMs : t.wallMs;
     if (ms > 0.0) photonsPerMs = static_cast<double>(count) / ms;
     if (options.progress) {
