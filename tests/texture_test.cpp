@@ -387,6 +387,20 @@ TEST(RenderTexture, SpecializedAndAllFeaturesKernelsAgreeOnATexturedScene) {
   EXPECT_NE(render(plain).image.pixels, specialized.image.pixels);
 }
 
+// Two triangles of `material` over the quad p[0..3], uv[0..3] at its corners, wound (0, 2, 1), (0, 3, 2).
+void addTexturedQuad(Scene& s, const std::array<glm::dvec3, 4>& p, const std::array<glm::dvec4, 4>& uv,
+                     std::uint32_t material) {
+  for (auto [a, b, c] : {std::array<int, 3>{0, 2, 1}, std::array<int, 3>{0, 3, 2}}) {
+    Triangle t;
+    t.v[0] = p[a];
+    t.v[1] = p[b];
+    t.v[2] = p[c];
+    t.uvs = std::array<glm::dvec4, 3>{uv[a], uv[b], uv[c]};
+    t.material = material;
+    s.triangles.push_back(t);
+  }
+}
+
 // A black and white checker texture repeated 64 times over a 40 x 40 square floor, seen at a
 // grazing angle: far away, many texels fall in a pixel. 256 point samples per pixel are the
 // reference; one cone-filtered sample should be much closer to it than one bilinear sample.
@@ -415,16 +429,8 @@ Scene checkerFloor() {
   m.baseColorTexture = MaterialTexture{};
   s.materials.push_back(m);
   const double h = 20.0, tiles = 64.0;
-  glm::dvec3 p[4] = {{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}};
-  glm::dvec4 uv[4] = {{0, 0, 0, 0}, {tiles, 0, 0, 0}, {tiles, tiles, 0, 0}, {0, tiles, 0, 0}};
-  for (auto [a, b, c] : {std::array<int, 3>{0, 2, 1}, std::array<int, 3>{0, 3, 2}}) {
-    Triangle t;
-    t.v[0] = p[a];
-    t.v[1] = p[b];
-    t.v[2] = p[c];
-    t.uvs = std::array<glm::dvec4, 3>{uv[a], uv[b], uv[c]};
-    s.triangles.push_back(t);
-  }
+  addTexturedQuad(s, {{{-h, 0, -h}, {h, 0, -h}, {h, 0, h}, {-h, 0, h}}},
+                  {{{0, 0, 0, 0}, {tiles, 0, 0, 0}, {tiles, tiles, 0, 0}, {0, tiles, 0, 0}}}, 0);
   return s;
 }
 
@@ -600,19 +606,13 @@ Scene coneScene() {
 // (+1 or -1 along z), uv from 0 to 1 across it.
 void addWall(Scene& s, double z, double side, double facing) {
   const double h = side / 2.0;
-  glm::dvec3 p[4] = {{-h, -h, z}, {h, -h, z}, {h, h, z}, {-h, h, z}};
-  glm::dvec4 uv[4] = {{0, 0, 0, 0}, {1, 0, 0, 0}, {1, 1, 0, 0}, {0, 1, 0, 0}};
-  auto corners = facing > 0 ? std::array<std::array<int, 3>, 2>{{{0, 1, 2}, {0, 2, 3}}}
-                            : std::array<std::array<int, 3>, 2>{{{0, 2, 1}, {0, 3, 2}}};
-  for (auto [a, b, c] : corners) {
-    Triangle t;
-    t.v[0] = p[a];
-    t.v[1] = p[b];
-    t.v[2] = p[c];
-    t.uvs = std::array<glm::dvec4, 3>{uv[a], uv[b], uv[c]};
-    t.material = 0;
-    s.triangles.push_back(t);
-  }
+  const glm::dvec3 p0{-h, -h, z}, p1{h, -h, z}, p2{h, h, z}, p3{-h, h, z};
+  const glm::dvec4 uv0{0, 0, 0, 0}, uv1{1, 0, 0, 0}, uv2{1, 1, 0, 0}, uv3{0, 1, 0, 0};
+  // Listed the other way round for the other face: triangles (p0, p1, p2) and (p0, p2, p3).
+  if (facing > 0)
+    addTexturedQuad(s, {p0, p3, p2, p1}, {uv0, uv3, uv2, uv1}, 0);
+  else
+    addTexturedQuad(s, {p0, p1, p2, p3}, {uv0, uv1, uv2, uv3}, 0);
 }
 
 double middleGrey(const Scene& s) {
@@ -751,17 +751,10 @@ Scene maskScene(double x0, bool mask) {
   wall.color = glm::dvec3(0.9);
   s.materials = {quad, wall};
   s.planes.push_back(Plane{{0, 0, 1}, 1.0, 1});
-  auto corner = [](double x, double y) { return glm::dvec4((x + 1) / 2, (1 - y) / 2, 0, 0); };
-  glm::dvec3 p[4] = {{x0, -1, 0}, {1, -1, 0}, {1, 1, 0}, {x0, 1, 0}};
-  for (auto [a, b, c] : {std::array<int, 3>{0, 1, 2}, std::array<int, 3>{0, 2, 3}}) {
-    Triangle t;
-    t.v[0] = p[a];
-    t.v[1] = p[b];
-    t.v[2] = p[c];
-    t.uvs = std::array<glm::dvec4, 3>{corner(p[a].x, p[a].y), corner(p[b].x, p[b].y), corner(p[c].x, p[c].y)};
-    t.material = 0;
-    s.triangles.push_back(t);
-  }
+  auto corner = [](const glm::dvec3& q) { return glm::dvec4((q.x + 1) / 2, (1 - q.y) / 2, 0, 0); };
+  const glm::dvec3 p0{x0, -1, 0}, p1{1, -1, 0}, p2{1, 1, 0}, p3{x0, 1, 0};
+  // Listed the other way round, so the triangles are (p0, p1, p2) and (p0, p2, p3).
+  addTexturedQuad(s, {p0, p3, p2, p1}, {corner(p0), corner(p3), corner(p2), corner(p1)}, 0);
   return s;
 }
 
