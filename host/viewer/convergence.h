@@ -3,11 +3,12 @@
 // since the last copy, the sums are copied (a buffer copy) and the copy before moves down a place,
 // so that the two copies and the sums split each pixel's samples in three blocks (at a count n
 // between copies at c and 2c: c/2, c/2 and n - c samples): render --noise-threshold's block
-// estimate of the standard error (host/render/adaptive.cpp, four blocks there) follows per pixel. A second step reduces
-// the estimates to a histogram of their logarithm and the count of pixels converged at the threshold (the mean estimate
-// over the 3 x 3 neighbourhood at most the threshold, as the headless progressive passes decide), read back by the host
-// twice a second; the figures' cost is that pass's, and the copy's when the count doubles (docs/viewer.md has the
-// measurements).
+// estimate of the standard error (host/render/adaptive.cpp, four blocks there) follows per pixel.
+// A second step reduces the estimates to a histogram of their logarithm and the count of pixels
+// converged at the threshold (0.8 of the pixel's own squared estimate and 0.2 of its 3 x 3
+// neighbourhood's mean square at most the threshold squared, as the headless progressive passes
+// decide), read back by the host twice a second; the figures' cost is that pass's, and the copies'
+// when the count doubles (docs/viewer.md has the measurements).
 #pragma once
 
 #include <cstdint>

@@ -31,8 +31,9 @@ VKRAY_CONST(uint, kDisplayCost, 2u);  // rays traced per sample (Renderer's rays
 
 // ---- The convergence pass (shaders/convergence.comp, host/viewer/convergence.h) -----------------
 // Step 0 estimates each pixel's standard error from the sums and their copies taken the last two
-// times the sample count doubled (three blocks of the pixel's samples); step 1 bins the estimates and counts the pixels whose 3 x 3 neighbourhood's
-// mean estimate is at most the threshold. Workgroups are image rows, as the resolve pass's.
+// times the sample count doubled (three blocks of the pixel's samples); step 1 bins the estimates
+// and counts the pixels converged at the threshold (kConvergenceOwnShare, below). Workgroups are
+// image rows, as the resolve pass's.
 VKRAY_CONST(uint, kConvergenceBindingSums, 0u);      // storage texel buffer (RGBA32F): the sums now
 VKRAY_CONST(uint, kConvergenceBindingHalf, 1u);      // storage texel buffer (RGBA32F): their earlier copy
 VKRAY_CONST(uint, kConvergenceBindingErrors, 2u);    // storage texel buffer (R32F): the estimates
