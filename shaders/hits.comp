@@ -44,7 +44,8 @@ void main() {
         vec3 origin = ROBUST ? spawnOrigin(s.p, ng, s.errorBound) : s.p; // as localShade (shade.glsl)
         vec3 toLight = lightPos - origin;
         float dist = length(toLight);
-        Hit blocker = traceScene(makeTraceRay(origin, toLight / dist), dist, true, true, false);
+        ShadowStart start = shadowEntryPoints(h.kind, h.index, 0u);
+        Hit blocker = traceScene(makeTraceRay(origin, toLight / dist), dist, true, true, false, start);
         result.w = blocker.kind == kNoHit ? 0.0 : 1.0;
       }
     }

@@ -12,6 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "accel/bvh.h"
+#include "accel/shadow_entries.h"
 #include "render/gpu_scene.h"
 #include "test_support.h"
 #include "util/error.h"
@@ -606,6 +607,9 @@ TEST(GpuBvh, EyeRayHitsEqualBruteForce) {
 TEST(GpuBvh, ShadowsEqualBruteForce) {
   auto tris = torus(48, 24);
   Image viaBvh = test::render(idScene(tris, true, BvhMode::On)).image;
+  RenderOptions fromEntries;
+  fromEntries.shadowEntryPoints = ShadowEntries::On; // shadow rays from their triangles' entry points
+  Image viaEntries = test::render(idScene(tris, true, BvhMode::On), fromEntries).image;
   Image brute = test::render(idScene(tris, true, BvhMode::Off)).image;
   Scene unshadowed = idScene(tris, true, BvhMode::On);
   unshadowed.lights[0].shadows = false;
@@ -614,6 +618,7 @@ TEST(GpuBvh, ShadowsEqualBruteForce) {
   int differing = 0, shadowed = 0;
   for (std::size_t i = 0; i < brute.pixels.size(); ++i) {
     if (brute.pixels[i] != viaBvh.pixels[i]) ++differing;
+    if (brute.pixels[i] != viaEntries.pixels[i]) ++differing;
     if (brute.pixels[i] != noShadows.pixels[i]) ++shadowed;
   }
   EXPECT_EQ(differing, 0);
@@ -731,6 +736,212 @@ TEST(GpuBvh, EntryPointsFindTheSameHitsAsTheRoot) {
       hits += b.hits[i].x > 0.0f;
     }
     EXPECT_GT(hits, b.hits.size() / 10) << "the view must show the scene";
+  }
+}
+
+// ---- Shadow entry points (host/accel/shadow_entries.h) ---------------------------------------------
+
+// The references under `refs`: every primitive a walk from them can reach.
+std::set<std::uint32_t> reachable(const GpuScene& g, const std::vector<std::uint32_t>& refs) {
+  std::set<std::uint32_t> prims;
+  std::vector<std::uint32_t> todo(refs.begin(), refs.end());
+  while (!todo.empty()) {
+    std::uint32_t ref = todo.back();
+    todo.pop_back();
+    if (ref < gpu::kBvhLeafFlag) {
+      todo.push_back(g.bvhNodes[ref].ref0);
+      todo.push_back(g.bvhNodes[ref].ref1);
+      continue;
+    }
+    std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
+    std::uint32_t end = first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u;
+    for (std::uint32_t k = first; k < end; ++k) prims.insert(g.bvh.primRefs[k]);
+  }
+  return prims;
+}
+
+// Whether the segment from `o` along unit `d` to distance `tMax` meets the sphere (in double).
+bool segmentMeetsSphere(const glm::dvec3& o, const glm::dvec3& d, double tMax, const glm::dvec3& c, double r) {
+  double t = std::clamp(glm::dot(c - o, d), 0.0, tMax);
+  return glm::length(o + t * d - c) <= r;
+}
+
+// Every shadow ray from a point of triangle T to light P (from on the triangle and from just off
+// either side of it, as the kernel's origins lie) that meets a triangle or sphere meets one a walk
+// from T's entry points reaches: brute force over every primitive. Lights in the hole of the
+// torus, far away, close to the surface and in a corner of the soup; subtrees shared by up to 0
+// (each triangle its own), 1, 8 and 64 leaves.
+TEST(ShadowEntries, EveryOccluderIsReachableFromTheEntryPoints) {
+  struct Case {
+    const char* name;
+    std::vector<Tri> tris;
+    bool local; // small triangles: each hull meets a small part of the scene
+  };
+  // Long thin triangles all cross the middle of the scene: every hull meets most of it.
+  const Case cases[] = {
+      {"torus", torus(24, 12), true}, {"soup", randomSoup(400, 7), true}, {"long thin", longThin(300, 3), false}};
+  const glm::dvec3 lights[] = {{0.0, 0.2, 0.0}, {90.0, 140.0, -60.0}, {3.0, 1.6, 0.4}, {-9.0, 9.0, -9.0}};
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    Scene scene = idScene(c.tris, true, BvhMode::On);
+    scene.lights.clear();
+    for (const glm::dvec3& p : lights) scene.lights.push_back(PointLight{p, glm::dvec3(1.0), true});
+    GpuScene g = packScene(scene, scene.camera.position, true);
+    ASSERT_EQ(g.lights.size(), std::size(lights));
+    for (std::uint32_t share : {0u, 1u, 8u, 64u}) {
+      SCOPED_TRACE("subtrees of up to " + std::to_string(share) + " leaves share their entries");
+      ShadowEntryOptions options;
+      options.shareBelow = share;
+      g.shadowEntries.clear();
+      buildShadowEntries(g, options);
+      ASSERT_EQ(g.shadowEntries.size(), 2 * g.triangles.size() * g.lights.size());
+      std::size_t blocked = 0, segments = 0, reached = 0;
+      for (std::uint32_t t = 0; t < g.triangles.size(); ++t) {
+        const gpu::Triangle& tri = g.triangles[t];
+        const glm::dvec3 v0(glm::vec3(tri.v0)), v1(glm::vec3(tri.v1)), v2(glm::vec3(tri.v2));
+        const glm::dvec3 n = glm::normalize(glm::cross(v1 - v0, v2 - v0));
+        for (std::uint32_t l = 0; l < g.lights.size(); ++l) {
+          const std::size_t at = 2 * (t * g.lights.size() + l);
+          const auto refs = shadowEntryRefs(g.shadowEntries[at], g.shadowEntries[at + 1]);
+          ASSERT_FALSE(refs.empty()) << "triangle " << t << " has no entry points";
+          ASSERT_LE(refs.size(), gpu::kShadowEntryMax);
+          const std::set<std::uint32_t> prims = reachable(g, refs);
+          reached += prims.size();
+          ASSERT_TRUE(prims.count(gpu::kPrimTriangle << gpu::kPrimKindShift | t)) << "its own triangle";
+          const glm::dvec3 light(glm::vec3(g.lights[l].position));
+          for (int k = 0; k < 9; ++k) {
+            // Vertices, the centroid, points inside, each nudged off the surface by a relative 1e-6.
+            double a = unit(rng), b = unit(rng);
+            if (a + b > 1.0) a = 1.0 - a, b = 1.0 - b;
+            if (k < 3) a = k == 1, b = k == 2;
+            if (k == 3) a = b = 1.0 / 3.0;
+            const double side = k % 3 == 0 ? 0.0 : (k % 3 == 1 ? 1e-6 : -1e-6);
+            const glm::dvec3 q = v0 + a * (v1 - v0) + b * (v2 - v0) + side * (1.0 + glm::length(v0)) * n;
+            const double dist = glm::length(light - q);
+            const glm::dvec3 d = (light - q) / dist;
+            ++segments;
+            bool hit = false;
+            for (std::uint32_t u = 0; u < g.triangles.size(); ++u) {
+              if (u == t) continue;
+              const gpu::Triangle& w = g.triangles[u];
+              Tri other{vec3(w.v0), vec3(w.v1), vec3(w.v2)};
+              if (intersectWatertight(vec3(q), vec3(d), other, static_cast<float>(dist)) > 0.0f) {
+                hit = true;
+                ASSERT_TRUE(prims.count(gpu::kPrimTriangle << gpu::kPrimKindShift | u))
+                    << "triangle " << u << " blocks a shadow ray from triangle " << t << " to light " << l
+                    << " but no entry point reaches it";
+              }
+            }
+            for (std::uint32_t s = 0; s < g.spheres.size(); ++s) {
+              const glm::vec4 cr = g.spheres[s].centerRadius;
+              if (segmentMeetsSphere(q, d, dist, glm::dvec3(glm::vec3(cr)), 1.0001 * cr.w)) {
+                hit = true;
+                ASSERT_TRUE(prims.count(gpu::kPrimSphere << gpu::kPrimKindShift | s))
+                    << "sphere " << s << " blocks a shadow ray from triangle " << t << " to light " << l
+                    << " but no entry point reaches it";
+              }
+            }
+            blocked += hit;
+          }
+        }
+      }
+      // Not vacuous: some rays are blocked, and the entry points leave much of the scene out.
+      EXPECT_GT(blocked, segments / 20) << blocked << " of " << segments << " segments blocked";
+      const double perPair = static_cast<double>(reached) / (g.triangles.size() * g.lights.size());
+      const std::size_t total = g.triangles.size() + g.spheres.size() + g.polygons.size();
+      if (c.local)
+        EXPECT_LT(perPair, 0.6 * total) << "primitives reachable per (triangle, light) on average, of " << total;
+    }
+  }
+}
+
+// Scenes the table leaves alone: no BVH, no triangles, too many lights.
+TEST(ShadowEntries, BuiltOnlyWhereTheKernelCanUseThem) {
+  Scene scene = idScene(torus(8, 4), true, BvhMode::On);
+  GpuScene g = packScene(scene, scene.camera.position, true);
+  buildShadowEntries(g);
+  EXPECT_EQ(g.shadowEntries.size(), 2 * g.triangles.size());
+  GpuScene noBvh = packScene(scene, scene.camera.position, false);
+  buildShadowEntries(noBvh);
+  EXPECT_TRUE(noBvh.shadowEntries.empty());
+  for (std::uint32_t i = 0; i < gpu::kShadowEntryLightsMax; ++i)
+    scene.lights.push_back(PointLight{glm::dvec3(i, 5.0, 0.0), glm::dvec3(1.0), true});
+  GpuScene many = packScene(scene, scene.camera.position, true);
+  buildShadowEntries(many);
+  EXPECT_TRUE(many.shadowEntries.empty());
+}
+
+// On the GPU: shadow rays from their entry points decide exactly as from the root, in the query
+// kernel and in the renderer's, with opaque and with transmissive occluders (several crossings,
+// each segment starting from the triangle it left), and with several lights.
+TEST(GpuBvh, ShadowEntryPointsCastTheSameShadows) {
+  Renderer& renderer = test::renderer();
+  for (bool glass : {false, true}) {
+    SCOPED_TRACE(glass ? "transmissive occluders" : "opaque occluders");
+    Scene scene = idScene(torus(48, 24), true, BvhMode::On);
+    scene.lights.push_back(PointLight{glm::dvec3(-4.0, 3.0, 5.0), glm::dvec3(0.6), true});
+    scene.lights.push_back(PointLight{glm::dvec3(0.0, 0.3, 0.0), glm::dvec3(0.4), true}); // in the hole
+    if (glass) {
+      for (std::size_t i = 0; i < scene.materials.size(); i += 2) scene.materials[i].transmission = 0.6;
+    }
+    scene.render.width = 120;
+    scene.render.height = 90;
+    renderer.setScene(scene);
+    RenderOptions off;
+    off.shadowEntryPoints = ShadowEntries::Off;
+    RenderOptions on;
+    on.shadowEntryPoints = ShadowEntries::On;
+    RenderResult a = renderer.render(scene.camera, scene.render, off);
+    EXPECT_TRUE(renderer.gpuScene().shadowEntries.empty()) << "off builds no table";
+    RenderResult b = renderer.render(scene.camera, scene.render, on);
+    ASSERT_FALSE(renderer.gpuScene().shadowEntries.empty()) << "on builds the table";
+    EXPECT_TRUE(b.features.useBvh);
+    test::expectNoValidationMessages();
+    ASSERT_EQ(a.image.pixels.size(), b.image.pixels.size());
+    std::size_t shadowed = 0;
+    for (std::size_t i = 0; i < a.image.pixels.size(); ++i) {
+      ASSERT_EQ(std::memcmp(&a.image.pixels[i], &b.image.pixels[i], sizeof(glm::vec3)), 0) << "pixel " << i;
+    }
+    EXPECT_EQ(a.stats.shadow, b.stats.shadow);
+    EXPECT_GT(a.stats.shadow, 0u);
+    if (!glass) {
+      RenderOptions qOff = off, qOn = on;
+      qOff.kernel = qOn.kernel = Kernel::Hits;
+      RenderResult c = renderer.render(scene.camera, scene.render, qOff);
+      RenderResult d = renderer.render(scene.camera, scene.render, qOn);
+      ASSERT_EQ(c.hits.size(), d.hits.size());
+      for (std::size_t i = 0; i < c.hits.size(); ++i) {
+        ASSERT_EQ(c.hits[i].w, d.hits[i].w) << "pixel " << i << ": the shadow ray decided otherwise";
+        shadowed += c.hits[i].w > 0.0f;
+      }
+      EXPECT_GT(shadowed, c.hits.size() / 50) << "the view must show shadows";
+    }
+  }
+}
+
+// Auto builds the table once the render's samples pay for it, and keeps it for the scene.
+TEST(GpuBvh, ShadowEntryPointsAreBuiltWhenTheyPay) {
+  Renderer& renderer = test::renderer();
+  Scene scene = idScene(torus(48, 24), true, BvhMode::On); // 2304 triangles
+  scene.render.width = 48;
+  scene.render.height = 36; // 1728 pixels: a sample of each is under one shadow ray per triangle
+  renderer.setScene(scene);
+  RenderOptions automatic;
+  RenderResult one = renderer.render(scene.camera, scene.render, automatic);
+  EXPECT_TRUE(renderer.gpuScene().shadowEntries.empty());
+  EXPECT_NE(renderer.shadowEntriesSkipped().find("too few pixel samples"), std::string::npos)
+      << renderer.shadowEntriesSkipped();
+  scene.render.spp = 64;
+  RenderResult many = renderer.render(scene.camera, scene.render, automatic);
+  EXPECT_FALSE(renderer.gpuScene().shadowEntries.empty()) << renderer.shadowEntriesSkipped();
+  scene.render.spp = 1;
+  RenderResult again = renderer.render(scene.camera, scene.render, automatic);
+  EXPECT_FALSE(renderer.gpuScene().shadowEntries.empty()) << "kept for the scene";
+  test::expectNoValidationMessages();
+  for (std::size_t i = 0; i < one.image.pixels.size(); ++i) {
+    ASSERT_EQ(std::memcmp(&one.image.pixels[i], &again.image.pixels[i], sizeof(glm::vec3)), 0) << "pixel " << i;
   }
 }
 

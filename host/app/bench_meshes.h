@@ -17,8 +17,9 @@ struct BenchMeshesArgs {
   std::uint32_t height = 600;
   int runs = 5;
   bool noEmbree = false;
-  bool noEntryPoints = false; // eye rays walk from the root (RenderOptions::entryPoints)
-  std::filesystem::path csv;  // also write the table here (for tools/plot-mesh-bench)
+  bool noEntryPoints = false;       // eye rays walk from the root (RenderOptions::entryPoints)
+  bool noShadowEntryPoints = false; // shadow rays walk from the root (RenderOptions::shadowEntryPoints)
+  std::filesystem::path csv;        // also write the table here (for tools/plot-mesh-bench)
   DeviceFlags device;
 };
 

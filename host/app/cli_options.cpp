@@ -61,6 +61,12 @@ void addKernelFlags(CLI::App& app, KernelFlags& f) {
                "trace rows whose eye rays provably miss everything instead of filling them (for comparison)");
   app.add_flag("--no-entry-points", f.noEntryPoints,
                "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
+  app.add_option("--shadow-entry-points", f.shadowEntryPoints,
+                 "start shadow rays from triangles at their (triangle, light)'s BVH subtrees, found once per scene: "
+                 "auto (when the render's shadow rays pay for the table), on or off; the same image either way")
+      ->check(CLI::IsMember(enumNameList<ShadowEntries>()));
+  app.add_flag("--no-shadow-entry-points", f.noShadowEntryPoints,
+               "the same as --shadow-entry-points off: every shadow ray walks the BVH from the root (for comparison)");
   app.add_flag("--one-sample-per-dispatch", f.oneSamplePerDispatch,
                "trace one sample of each pixel per dispatch, one invocation per pixel, as on a driver that cuts "
                "long loops short, instead of all of a band's samples in one dispatch (the same image; for "
@@ -76,6 +82,7 @@ void applyKernelFlags(const KernelFlags& f, RenderOptions& o) {
   o.unroll = !f.noUnroll;
   o.cullRows = !f.noRowCulling;
   o.entryPoints = !f.noEntryPoints;
+  o.shadowEntryPoints = f.noShadowEntryPoints ? ShadowEntries::Off : *parseEnum<ShadowEntries>(f.shadowEntryPoints);
   o.oneSamplePerDispatch = f.oneSamplePerDispatch;
   o.sceneMemory = *parseEnum<SceneMemory>(f.sceneMemory);
 }

@@ -37,13 +37,15 @@ CLI::Validator positiveReal(double hi); // (0, hi], NaN refused
 
 // The renderer's own switches, for comparison runs: each maps onto a RenderOptions field.
 struct KernelFlags {
-  bool noSpecialize = false;         // --no-specialize
-  bool noSpirvFolding = false;       // --no-spirv-folding
-  bool noUnroll = false;             // --no-unroll
-  bool noRowCulling = false;         // --no-row-culling
-  bool noEntryPoints = false;        // --no-entry-points
-  bool oneSamplePerDispatch = false; // --one-sample-per-dispatch
-  std::string sceneMemory = "auto";  // --scene-memory, a SceneMemory name
+  bool noSpecialize = false;              // --no-specialize
+  bool noSpirvFolding = false;            // --no-spirv-folding
+  bool noUnroll = false;                  // --no-unroll
+  bool noRowCulling = false;              // --no-row-culling
+  bool noEntryPoints = false;             // --no-entry-points
+  bool noShadowEntryPoints = false;       // --no-shadow-entry-points
+  std::string shadowEntryPoints = "auto"; // --shadow-entry-points, a ShadowEntries name
+  bool oneSamplePerDispatch = false;      // --one-sample-per-dispatch
+  std::string sceneMemory = "auto";       // --scene-memory, a SceneMemory name
 };
 
 void addDeviceFlags(CLI::App& app, DeviceFlags& flags);

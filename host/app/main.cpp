@@ -139,6 +139,9 @@ int main(int argc, char** argv) {
   benchMeshesCmd->add_flag("--no-embree", benchMeshes.noEmbree, "skip the Embree side");
   benchMeshesCmd->add_flag("--no-entry-points", benchMeshes.noEntryPoints,
                            "vkray's eye rays walk the BVH from the root, not from their tile's entry points");
+  benchMeshesCmd->add_flag("--no-shadow-entry-points", benchMeshes.noShadowEntryPoints,
+                           "vkray's shadow rays walk the BVH from the root, not from their triangle's shadow entry "
+                           "points");
   benchMeshesCmd->add_option("--csv", benchMeshes.csv, "also write the table as CSV (tools/plot-mesh-bench)");
   addDeviceFlags(*benchMeshesCmd, benchMeshes.device);
 

@@ -126,6 +126,20 @@ void orderByLeaves(GpuScene& g) {
   g.texCoords = std::move(texCoords);
 }
 
+void buildShadowEntries(GpuScene& g, const ShadowEntryOptions& options) {
+  if (g.bvhRoot == gpu::kBvhNoRef || g.bvh.nodes.empty() || g.triangles.empty() || g.lights.empty() ||
+      g.lights.size() > gpu::kShadowEntryLightsMax)
+    return;
+  const auto start = std::chrono::steady_clock::now();
+  std::vector<glm::dvec3> lights;
+  for (const gpu::Light& l : g.lights) lights.emplace_back(glm::vec3(l.position));
+  Aabb rootBox;
+  rootBox.min = g.bvh.nodes[0].boundsMin;
+  rootBox.max = g.bvh.nodes[0].boundsMax;
+  g.shadowEntries = shadowEntryTable({g.bvhNodes, g.bvhRoot, rootBox, g.bvh.primRefs, g.triangles, lights}, options);
+  g.shadowEntryMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
 std::size_t GpuScene::bvhBytes() const {
   return bvhNodes.size() * sizeof(gpu::BvhWideNode) + bvh.primRefs.size() * sizeof(std::uint32_t);
 }

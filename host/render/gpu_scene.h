@@ -10,6 +10,7 @@
 
 #include "../../shaders/shared/gpu_types.h"
 #include "accel/bvh.h"
+#include "accel/shadow_entries.h"
 #include "scene/scene.h"
 
 namespace vkray {
@@ -46,6 +47,11 @@ struct GpuScene {
   // The BVH in the shader's layout (wideBvh) and its root reference.
   std::vector<gpu::BvhWideNode> bvhNodes;
   std::uint32_t bvhRoot = gpu::kBvhNoRef;
+  // Shadow entry points (accel/shadow_entries.h): two texels per (triangle, light), uploaded after
+  // the BVH records. Empty until Renderer::prepare builds them for a render that gains from them
+  // (buildShadowEntries).
+  std::vector<glm::uvec4> shadowEntries;
+  double shadowEntryMs = 0.0; // the table's build time
 
   std::size_t bytes() const;
   std::size_t bvhBytes() const; // what the kernel reads of the BVH: the records and the references
@@ -57,6 +63,11 @@ struct GpuScene {
 // Packs the scene relative to `origin`; builds the BVH when withBvh. With a BVH, the primitive
 // arrays are reordered to follow the leaves (see orderByLeaves).
 GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, const BvhOptions& bvhOptions = {});
+
+// Builds g.shadowEntries for every triangle and light (accel/shadow_entries.h) and times it in
+// g.shadowEntryMs; nothing where the scene has no BVH, no triangles, no lights or more than
+// gpu::kShadowEntryLightsMax lights.
+void buildShadowEntries(GpuScene& g, const ShadowEntryOptions& options = {});
 
 // The BVH's input: one box per sphere, triangle and polygon of the packed scene, in float and
 // conservative (the float primitive lies inside its box).

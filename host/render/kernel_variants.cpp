@@ -27,6 +27,7 @@ SceneShape shapeOf(const GpuScene& g) {
   s.lights = g.lights.size();
   s.materials = g.materials.size();
   s.hasBvh = !g.bvh.nodes.empty();
+  s.shadowEntries = !g.shadowEntries.empty();
   return s;
 }
 
@@ -43,6 +44,8 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecUseBvh, useBvh);
   // Entry points are found for rays from the eye point; a lens's eye rays start off it.
   spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints && !f.thinLens);
+  spec.set(gpu::kSpecShadowEntries,
+           useBvh && o.shadowEntryPoints != ShadowEntries::Off && shape.shadowEntries && (all || f.shadows));
   spec.set(gpu::kSpecShadows, all || f.shadows);
   spec.set(gpu::kSpecReflection, all || f.reflection);
   spec.set(gpu::kSpecRefraction, all || f.refraction);

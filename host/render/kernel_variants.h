@@ -25,6 +25,7 @@ namespace vkray {
 struct SceneShape {
   std::size_t spheres = 0, triangles = 0, polygons = 0, planes = 0, occluderPlanes = 0, lights = 0, materials = 0;
   bool hasBvh = false;
+  bool shadowEntries = false; // the scene has a shadow entry points table (GpuScene::shadowEntries)
 };
 SceneShape shapeOf(const GpuScene& scene);
 

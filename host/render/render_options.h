@@ -33,6 +33,16 @@ template <> struct EnumNames<SceneMemory> {
       {{SceneMemory::Auto, "auto"}, {SceneMemory::Uniform, "uniform"}, {SceneMemory::Storage, "storage"}}};
 };
 
+// Whether shadow rays from triangles start their BVH walk at their (triangle, light)'s shadow entry
+// points (host/accel/shadow_entries.h; the same occluders either way). Auto: when the render traces
+// enough shadow rays per (triangle, light) to pay for building the table (Renderer::prepare,
+// shadowEntriesPay); On: always (where the scene allows one); Off: never.
+enum class ShadowEntries { Auto, On, Off };
+template <> struct EnumNames<ShadowEntries> {
+  static constexpr std::array<EnumName<ShadowEntries>, 3> values{
+      {{ShadowEntries::Auto, "auto"}, {ShadowEntries::On, "on"}, {ShadowEntries::Off, "off"}}};
+};
+
 // Which kernel render() runs: the renderer's, or the ray queries alone (shaders/hits.comp: closest
 // hit of each pixel-centre eye ray and, with shadows, one any-hit shadow ray; no shading), which
 // `vkray bench meshes` sets against Embree, or the first-hit AOVs of the pixel-centre eye rays
@@ -68,6 +78,9 @@ struct RenderOptions {
   // Eye rays start their BVH walk at their 8 x 8 tile's entry points, found once per tile by
   // shaders/entry.comp (the same hits; docs/performance.md, "Entry points"). Off: --no-entry-points.
   bool entryPoints = true;
+  // Shadow rays from a triangle start their BVH walk at the (triangle, light)'s shadow entry points
+  // (see ShadowEntries): --shadow-entry-points auto|on|off, --no-shadow-entry-points.
+  ShadowEntries shadowEntryPoints = ShadowEntries::Auto;
   // render() traces only rows [rowBegin, rowEnd) (rowEnd 0: to the last row); the other rows of the
   // image are black. A tile of the image, the same pixels as rendering it whole.
   std::uint32_t rowBegin = 0;

@@ -18,6 +18,8 @@ namespace {
 
 // Bytes of image window the renderer allows itself: bands of rows are traced into it and read back.
 constexpr vk::DeviceSize kImageWindowBudget = 64ull << 20;
+// The most the shadow entry points' table may take (32 bytes per triangle and light).
+constexpr std::uint64_t kShadowEntryBudget = 512ull << 20;
 // The image window and the refine pass's copy are texel buffers of (sum rgb, samples).
 constexpr vk::Format kImageTexelFormat = vk::Format::eR32G32B32A32Sfloat;
 
@@ -500,6 +502,7 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   // The BVH exists only if setScene built it; without it the kernel loops over all primitives.
   current_.useBvh = current_.useBvh && !gpuScene_.bvh.nodes.empty();
   memory_ = sceneBuffers_.memoryFor(options.sceneMemory);
+  const bool newTable = prepareShadowEntries(settings, options);
   kernels_ = library_.realize(planKernels(current_, settings, options, shapeOf(gpuScene_), memory_));
 
   const bool adaptive =
@@ -525,8 +528,60 @@ void Renderer::prepare(const Camera& camera, const RenderSettings& settings, con
   // A progressive render lists its open pixels in the pass input (the refine pass's buffer).
   ensureImageWindow(settings.width, rows, pixelTexels, adaptive || progressiveRender(settings, options),
                     options.pixelRays);
+  if (newTable) updateDescriptors(); // the BVH records' buffer was replaced
   writeFrameParams(camera, settings, current_);
   firstDispatchNewPipelines();
+}
+
+namespace {
+
+// What the shadow entry points' table costs and saves, on the 2-core KVM machine with an 8 MB L3
+// (lavapipe Mesa 25.0.7, 2026-12-05; docs/performance.md, "Shadow entry points per triangle and
+// light"): about 0.18 µs per (triangle, light) to build on both threads, 90-130 ns saved per
+// shadow ray that leaves a triangle of a 100 k- to 1 M-triangle mesh, so it pays after about two
+// shadow rays per (triangle, light). A pixel sample sends at most one shadow ray to each light
+// from its eye ray's hit, fewer where eye rays miss or face away from the light: the rule asks
+// for twice that many pixel samples per triangle.
+constexpr double kPixelSamplesPerTriangle = 4.0;
+
+bool shadowEntriesPay(std::size_t triangles, double samplesPerPixel, std::uint64_t pixels) {
+  return samplesPerPixel * static_cast<double>(pixels) >= kPixelSamplesPerTriangle * static_cast<double>(triangles);
+}
+
+} // namespace
+
+bool Renderer::prepareShadowEntries(const RenderSettings& settings, const RenderOptions& options) {
+  GpuScene& g = gpuScene_;
+  if (!g.shadowEntries.empty()) return false;
+  auto skip = [&](std::string why) {
+    shadowEntriesSkipped_ = std::move(why);
+    return false;
+  };
+  if (options.shadowEntryPoints == ShadowEntries::Off) return skip("off (--shadow-entry-points off)");
+  if (!current_.useBvh || g.triangles.empty()) return skip("none (no triangles in a BVH)");
+  if (!current_.shadows || (options.kernel != Kernel::Shade && options.kernel != Kernel::Hits))
+    return skip("none (no shadow rays)");
+  if (g.lights.size() > gpu::kShadowEntryLightsMax)
+    return skip("none (more than " + std::to_string(gpu::kShadowEntryLightsMax) + " lights)");
+  const std::uint64_t texels = 4ull * g.bvhNodes.size() + 2ull * g.triangles.size() * g.lights.size();
+  if (texels > context_.info().maxTexelBufferElements || texels * sizeof(glm::uvec4) > kShadowEntryBudget)
+    return skip("none (the table would not fit one texel buffer)");
+  if (options.shadowEntryPoints == ShadowEntries::Auto) {
+    // The viewer accumulates without end; a progressive render takes at least minSpp samples.
+    const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
+    const std::uint64_t pixels =
+        static_cast<std::uint64_t>(settings.width) * (rowEnd > options.rowBegin ? rowEnd - options.rowBegin : 0u);
+    const double samples = options.progressive                    ? 1e30
+                           : progressiveRender(settings, options) ? std::max(1, settings.minSpp)
+                                                                  : std::max(1, settings.spp);
+    if (!shadowEntriesPay(g.triangles.size(), samples, pixels))
+      return skip("not built (too few pixel samples per triangle to pay for it; --shadow-entry-points on builds it)");
+  }
+  buildShadowEntries(g);
+  if (g.shadowEntries.empty()) return skip("none");
+  shadowEntriesSkipped_.clear();
+  sceneBuffers_.uploadBvhNodes(g);
+  return true;
 }
 
 void Renderer::firstDispatchNewPipelines() {
@@ -664,6 +719,10 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.lightCount = static_cast<std::uint32_t>(g.lights.size());
   p.occluderPlaneCount = g.occluderPlanes;
   p.bvhRoot = g.bvhRoot;
+  if (!g.shadowEntries.empty()) {
+    p.shadowEntryBase = static_cast<std::uint32_t>(4 * g.bvhNodes.size()); // never 0: the root has a record
+    p.shadowEntryLights = static_cast<std::uint32_t>(g.lights.size());     // two texels each
+  }
   p.triangleBoundsMin = glm::vec4(g.triangleBounds.min, 0.0f);
   p.triangleBoundsMax = glm::vec4(g.triangleBounds.max, 0.0f);
   p.polygonBoundsMin = glm::vec4(g.polygonBounds.min, 0.0f);

@@ -43,6 +43,8 @@ public:
   double uploadMs() const { return sceneBuffers_.uploadMs(); }
   double bvhBuildMs() const { return gpuScene_.bvh.stats.buildMs; }
   const GpuScene& gpuScene() const { return gpuScene_; }
+  // Why the scene has no shadow entry points' table (empty once it has one): `render --stats`.
+  const std::string& shadowEntriesSkipped() const { return shadowEntriesSkipped_; }
   const Features& sceneFeatures() const { return features_; }
   HostPageUse sceneHostPages() const { return sceneBuffers_.hostPages(); }
 
@@ -90,6 +92,9 @@ public:
   double lastPipelineMs() const { return kernels_.buildMs; }
 
 private:
+  // Builds and uploads the shadow entry points' table when the render's options ask for it and
+  // its shadow rays pay for it (shadowEntriesPay in renderer.cpp); returns whether it did now.
+  bool prepareShadowEntries(const RenderSettings& settings, const RenderOptions& options);
   // One pass over the whole image in bands: the sample pass, or (refine) adaptive AA's refine pass
   // deciding from `base`. The sizer carries the measured speed from one pass to the next.
   // Rows [begin, end) of the image.
@@ -139,6 +144,7 @@ private:
 
   // This render (or prepared viewer frame).
   Features current_;
+  std::string shadowEntriesSkipped_;
   SceneMemoryUse memory_;
   KernelSet kernels_;
   CullScene cull_; // the frame's camera and scene, for row culling

@@ -55,7 +55,7 @@ void SceneBuffers::upload(const GpuScene& g) {
   uploadTexels(buffers_[gpu::kBindingTextureInfo], context_, g.textureInfo, vk::Format::eR32G32B32A32Uint,
                "texture records");
   uploadTexels(buffers_[gpu::kBindingTexels], context_, g.texels, vk::Format::eR32G32B32A32Sfloat, "textures");
-  uploadTexels(buffers_[gpu::kBindingBvhNodes], context_, g.bvhNodes, vk::Format::eR32G32B32A32Uint, "BVH nodes");
+  uploadBvhNodes(g);
   uploadTexels(buffers_[gpu::kBindingPrimRefs], context_, g.bvh.primRefs, vk::Format::eR32Uint,
                "BVH primitive references");
   shadingFitsUbo_ = g.materials.size() <= gpu::kUboMaterials && g.lights.size() <= gpu::kUboLights &&
@@ -81,6 +81,18 @@ void SceneBuffers::upload(const GpuScene& g) {
                                        vulkan::MemoryUse::DeviceLocal, "small scene (uniform)");
   buffers_[gpu::kBindingSceneUbo]->write(packed.get(), sizeof(gpu::SceneUbo));
   uploadMs_ = std::chrono::duration<double, std::milli>(Clock::now() - start).count();
+}
+
+void SceneBuffers::uploadBvhNodes(const GpuScene& g) {
+  // The records, then the shadow entry points' table (FrameParams::shadowEntryBase).
+  auto& nodes = buffers_[gpu::kBindingBvhNodes];
+  const std::size_t recordBytes = g.bvhNodes.size() * sizeof(gpu::BvhWideNode);
+  const std::size_t tableBytes = g.shadowEntries.size() * sizeof(glm::uvec4);
+  nodes.reset(); // the old array's memory goes back first
+  nodes = std::make_unique<vulkan::Buffer>(context_, recordBytes + tableBytes, vk::Format::eR32G32B32A32Uint,
+                                           vulkan::MemoryUse::DeviceLocal, "BVH nodes");
+  nodes->write(g.bvhNodes.data(), recordBytes);
+  if (tableBytes > 0) nodes->write(g.shadowEntries.data(), tableBytes, recordBytes);
 }
 
 SceneMemoryUse SceneBuffers::memoryFor(SceneMemory requested) const {

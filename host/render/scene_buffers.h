@@ -33,6 +33,10 @@ public:
   explicit SceneBuffers(const vulkan::Context& context);
 
   void upload(const GpuScene& scene);
+  // The BVH records and, after them, the shadow entry points' table (GpuScene::shadowEntries):
+  // upload() calls it, and Renderer::prepare again once it has built the table. The descriptors
+  // that name the old buffer must be rewritten.
+  void uploadBvhNodes(const GpuScene& scene);
   bool uploaded() const { return buffers_[gpu::kBindingMaterials] != nullptr; }
   double uploadMs() const { return uploadMs_; }
 

@@ -33,6 +33,19 @@ void leafPrimitive(uint entry, out uint kind, out uint index) {
   }
 }
 
+// A shadow ray's entry points (host/accel/shadow_entries.h) when it leaves triangle `triangle` for
+// light `light`: the two texels of gpu_types.h's layout. From the root (x kBvhNoRef) where the
+// scene has no table or the ray leaves another kind of surface.
+ShadowStart fromTheRoot() {
+  return ShadowStart(uvec4(kBvhNoRef), uvec4(kBvhNoRef, kBvhNoRef, kBvhNoRef, 0u));
+}
+
+ShadowStart shadowEntryPoints(uint kind, uint triangle, uint light) {
+  if (!SHADOW_ENTRIES || kind != kPrimTriangle || frame.shadowEntryBase == 0u) return fromTheRoot();
+  int texel = int(frame.shadowEntryBase + 2u * (triangle * frame.shadowEntryLights + light));
+  return ShadowStart(imageLoad(nodeTexels, texel), imageLoad(nodeTexels, texel + 1));
+}
+
 // The entries [first, end) of a leaf reference (BvhWideNode).
 void leafEntries(uint leaf, out uint first, out uint end) {
   first = leaf & kBvhLeafFirstMask;
@@ -90,7 +103,10 @@ bool anyLane(bool c) {
 // On lavapipe this beats walking the tree as a subgroup packet (one node read per 8 rays, shared by
 // broadcast; Wald et al. 2001), which vkray did while nodes were storage-buffer reads
 // (docs/performance.md, "Meshes").
-void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
+//
+// `shadowStart` (SHADOW_ENTRIES): a shadow ray's entry points, as shadowEntryPoints() gives them;
+// a.x kBvhNoRef walks from the root.
+void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints, ShadowStart shadowStart) {
   // The builder caps the depth at kBvhStackSize; a walk from entry points starts with up to
   // kEntryStackSlots of them stacked.
   uint stack[kBvhStackSize + kEntryStackSlots];
@@ -107,6 +123,20 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints) {
     if (fromEntryPoints) {
       ref = entryStart(gEntryPoints);
       sp = int(entryStackHeight(gEntryPoints));
+    }
+  }
+  if (SHADOW_ENTRIES && !fromEntryPoints) {
+    // Constant slots again (after the eye rays' words, which they replace): the shadow ray's start
+    // and up to six subtrees stacked under it.
+    stack[0] = shadowStart.a.y;
+    stack[1] = shadowStart.a.z;
+    stack[2] = shadowStart.a.w;
+    stack[3] = shadowStart.b.x;
+    stack[4] = shadowStart.b.y;
+    stack[5] = shadowStart.b.z;
+    if (shadowStart.a.x != kBvhNoRef) {
+      ref = shadowStart.a.x;
+      sp = int(shadowStart.b.w);
     }
   }
   if (ref == kBvhNoRef) return; // an empty tree, or a tile whose frustum meets nothing

@@ -59,6 +59,7 @@ float meshCurvature(vec3 p0, vec3 p1, vec3 p2, vec3 n0, vec3 n1, vec3 n2, vec3 n
 Surface surfaceAt(TraceRay r, Hit hit) {
   Surface s;
   s.kind = hit.kind;
+  s.index = hit.index;
   if (TEXTURES) {
     s.hasUv = false;
     s.curvature = 0.0;

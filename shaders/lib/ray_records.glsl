@@ -27,6 +27,7 @@ struct Surface {
   float errorBound; // distance of p from the true surface along ng, at most
   uint material;
   uint kind;        // kPrim* of the primitive hit
+  uint index;       // and its index in its array
   // TEXTURES only (left unset otherwise, so the compiler drops them):
   bool hasUv;       // a triangle with texture coordinates
   vec4 uv;          // xy: set 0, zw: set 1

@@ -19,8 +19,9 @@
 // on CPU drivers (3 % of the showcase's instructions), so it runs to the end. shadowRay: skip the
 // planes the host proved cannot stand between a surface and a light (host/scene/features.cpp).
 // eyeRay: a ray from the eye through this invocation's pixel, which may start from the tile's entry
-// points (loadEntryPoints).
-Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay) {
+// points (loadEntryPoints). shadowStart: a shadow ray's entry points (shadowEntryPoints in
+// bvh.glsl; a.x kBvhNoRef: from the root).
+Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay, ShadowStart shadowStart) {
   Hit hit = Hit(tMax, kNoHit, 0u, vec3(0.0));
   uint planes = HAS_PLANES ? (shadowRay ? occluderPlaneCount() : planeCount()) : 0u;
   if (planes > 0u) {
@@ -36,7 +37,7 @@ Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay)
     }
   }
   if (USE_BVH) {
-    traverseBvh(r, hit, anyHit, ENTRY_POINTS && eyeRay);
+    traverseBvh(r, hit, anyHit, ENTRY_POINTS && eyeRay, shadowStart);
   } else {
     uint spheres = HAS_SPHERES ? sphereCount() : 0u;
     if (spheres > 0u) {
@@ -70,6 +71,10 @@ Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay)
     }
   }
   return hit;
+}
+
+Hit traceScene(TraceRay r, float tMax, bool anyHit, bool shadowRay, bool eyeRay) {
+  return traceScene(r, tMax, anyHit, shadowRay, eyeRay, fromTheRoot());
 }
 
 #endif

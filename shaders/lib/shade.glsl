@@ -102,10 +102,12 @@ vec3 baseColor(Material mat, Surface s) {
   return c;
 }
 
-// Fraction of a light's colour that reaches `origin` (already offset off the surface): 0 or 1 for
-// opaque shadows; through transmissive surfaces, the product of their transmissions and the
-// Beer-Lambert absorption between entering and leaving (POV-Ray's default behaviour).
-vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
+// Fraction of light `light`'s colour that reaches `origin` (already offset off the surface, a
+// primitive of kind `kind` and index `index`, whose shadow entry points start the walk where it is
+// a triangle): 0 or 1 for opaque shadows; through transmissive surfaces, the product of their
+// transmissions and the Beer-Lambert absorption between entering and leaving (POV-Ray's default
+// behaviour).
+vec3 shadowTransmittance(vec3 origin, vec3 lightPos, uint light, uint kind, uint index) {
   vec3 toLight = lightPos - origin;
   float dist = length(toLight);
   vec3 dir = toLight / dist;
@@ -115,7 +117,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     // An origin at the light (dist 0) is lit; its NaN direction meets nothing. Selects, not an
     // early return: on CPU drivers a return masks all the code after it.
     if (COUNT_RAYS) gCount.shadowRays += uint(dist > 0.0);
-    Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true, false);
+    Hit h = traceScene(makeTraceRay(origin, dir), dist, true, true, false, shadowEntryPoints(kind, index, light));
     if (RECORD_TREE) treeNoteShadowHit(h, origin, dir, dist);
     return (dist <= 0.0 || h.kind == kNoHit) ? vec3(1.0) : vec3(0.0);
   }
@@ -125,11 +127,12 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
   float travelled = 0.0; // along the shadow ray from the first origin
   float enteredAt = 0.0;
   int crossing = 0;
+  uint fromKind = kind, fromIndex = index; // the surface the segment leaves
   while (true) { // tested at the bottom (see traverseBvh in bvh.glsl)
     if (COUNT_RAYS) gCount.shadowRays++;
     TraceRay r = makeTraceRay(o, dir);
     float remaining = length(lightPos - o);
-    Hit h = traceScene(r, remaining, false, true, false);
+    Hit h = traceScene(r, remaining, false, true, false, shadowEntryPoints(fromKind, fromIndex, light));
     if (h.kind == kNoHit) return transmit;
     Surface s = surfaceAt(r, h);
     Material m = loadMaterial(s.material);
@@ -148,6 +151,8 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos) {
     vec3 next = ROBUST ? spawnOrigin(s.p, side, s.errorBound) : s.p;
     travelled += length(next - o);
     o = next;
+    fromKind = h.kind;
+    fromIndex = h.index;
     if (++crossing >= kMaxShadowCrossings) break;
   }
   return transmit;
@@ -177,7 +182,7 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
     if (lit) {
       vec3 visible = vec3(1.0);
       if (RECORD_TREE) treeShadowStart();
-      if (SHADOWS && castsShadows(light)) visible = shadowTransmittance(origin, lightPosition(light));
+      if (SHADOWS && castsShadows(light)) visible = shadowTransmittance(origin, lightPosition(light), i, s.kind, s.index);
       vec3 r = reflect(-l, nsf);
       float rv = dot(r, v);
       // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.

@@ -136,7 +136,10 @@ VKRAY_CONST(uint, kSpecThinLens, 33u);
 // inspector, run on one pixel. Off in every other pipeline, where the recorder compiles out to
 // nothing (tests/ray_tree_test.cpp compares the folded SPIR-V with a build without it).
 VKRAY_CONST(uint, kSpecRecordTree, 34u);
-VKRAY_CONST(uint, kSpecCount, 35u);
+// Shadow rays from a triangle start their BVH walk at the (triangle, light)'s shadow entry points
+// (host/accel/shadow_entries.h) instead of the root.
+VKRAY_CONST(uint, kSpecShadowEntries, 35u);
+VKRAY_CONST(uint, kSpecCount, 36u);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
@@ -198,6 +201,11 @@ VKRAY_CONST(uint, kBvhLeafFirstMask, 0x07FFFFFFu);
 VKRAY_CONST(uint, kBvhNoRef, 0xFFFFFFFFu); // an empty tree's root
 VKRAY_CONST(uint, kPrimPlane, 3u);         // never in the BVH; used to tag hits
 VKRAY_CONST(uint, kBvhStackSize, 32u);     // the builder caps tree depth at this (host/accel/bvh.h)
+// Shadow entry points (host/accel/shadow_entries.h): two texels per (triangle, light) after the
+// BVH records, (start, stack 0, 1, 2) and (stack 3, 4, 5, stack height), the stack bottom first,
+// kBvhNoRef where unused. kEntryStackSlots bounds the stacked ones.
+VKRAY_CONST(uint, kShadowEntryMax, 7u);
+VKRAY_CONST(uint, kShadowEntryLightsMax, 4u); // lights a scene may have for shadow entry points
 
 // Entry points (shaders/entry.comp): for each tile of kEntryTileSize x kEntryTileSize pixels (one
 // workgroup of the trace kernels), the BVH subtrees its eye rays' frustum reaches, at most
@@ -306,6 +314,12 @@ struct TileEntryPoints {
   uvec4 stack;    // the walk's stack words 0..3, bottom first (the farthest entry point at the bottom)
   uvec4 stackTop; // xy: stack words 4, 5; z: the entry point to start at (kBvhNoRef: the frustum meets nothing);
                   // w: the stack's height (words in use)
+};
+
+// A shadow ray's entry points (kShadowEntryMax): the two texels of its (triangle, light).
+struct ShadowStart {
+  uvec4 a; // x: the subtree to start at (kBvhNoRef: the root); yzw: stack words 0, 1, 2
+  uvec4 b; // xyz: stack words 3, 4, 5; w: the stack's height
 };
 
 #ifndef __cplusplus
@@ -423,14 +437,14 @@ struct FrameParams {
   float coneSpread;        // textures: the eye rays' cone spread angle, radians per unit distance
   float focusDistance;     // thin lens: distance of the plane in focus along cameraForward
   uvec2 imageSize;         // width, height in pixels
-  uint unused0;
-  uint maxDepth; // bounces after the eye ray
+  uint shadowEntryBase;    // shadow entry points' first texel in BvhNodes[] (SHADOW_ENTRIES; 0: none)
+  uint maxDepth;           // bounces after the eye ray
   uint sphereCount;
   uint planeCount;
   uint triangleCount;
   uint polygonCount;
   uint lightCount;
-  uint unused1;
+  uint shadowEntryLights;  // lights per triangle in the shadow entry points' table
   uint occluderPlaneCount; // planes that can cast shadows (first in Planes[])
   uint bvhRoot;            // the BVH root's reference (BvhWideNode)
   // Without a BVH: boxes around all triangles and around all polygons (xyz; exact, from the float

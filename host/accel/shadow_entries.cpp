@@ -1,0 +1,302 @@
+// Shadow entry points (see shadow_entries.h).
+#include "accel/shadow_entries.h"
+
+#include <algorithm>
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+namespace vkray {
+namespace {
+
+// A convex region that holds the convex hull of some points, widened by a margin: their bounding
+// box and slabs on up to four more axes. A box is kept unless it misses one of them (a separating
+// axis); every axis gives a valid test, so a degenerate one is simply left out.
+struct Region {
+  glm::dvec3 lo, hi;
+  std::array<glm::dvec3, 4> axis;
+  std::array<double, 4> amin, amax;
+  int axes = 0;
+
+  Region(const glm::dvec3* points, int count, const glm::dvec3* candidates, int candidateCount, double margin) {
+    lo = hi = points[0];
+    for (int k = 1; k < count; ++k) {
+      lo = glm::min(lo, points[k]);
+      hi = glm::max(hi, points[k]);
+    }
+    lo -= margin;
+    hi += margin;
+    for (int c = 0; c < candidateCount; ++c) {
+      const double len = glm::length(candidates[c]);
+      if (!(len > 0.0) || !std::isfinite(len)) continue;
+      const glm::dvec3 n = candidates[c] / len;
+      double mn = glm::dot(n, points[0]), mx = mn;
+      for (int k = 1; k < count; ++k) {
+        mn = std::min(mn, glm::dot(n, points[k]));
+        mx = std::max(mx, glm::dot(n, points[k]));
+      }
+      axis[axes] = n;
+      amin[axes] = mn - margin;
+      amax[axes] = mx + margin;
+      ++axes;
+    }
+  }
+
+  bool meets(const glm::vec3& bmin, const glm::vec3& bmax) const {
+    const glm::dvec3 b0(bmin), b1(bmax);
+    if (b0.x > hi.x || b0.y > hi.y || b0.z > hi.z || b1.x < lo.x || b1.y < lo.y || b1.z < lo.z) return false;
+    const glm::dvec3 c = 0.5 * (b0 + b1), h = 0.5 * (b1 - b0);
+    for (int k = 0; k < axes; ++k) {
+      const double centre = glm::dot(axis[k], c);
+      const double radius = glm::dot(glm::abs(axis[k]), h);
+      if (centre + radius < amin[k] || centre - radius > amax[k]) return false;
+    }
+    return true;
+  }
+};
+
+double magnitude(const glm::dvec3& p) {
+  return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
+}
+
+// hull(T, light): the triangle's plane and the three faces through the light.
+Region triangleHull(const glm::dvec3 v[3], const glm::dvec3& light) {
+  const glm::dvec3 points[4] = {v[0], v[1], v[2], light};
+  const double scale =
+      std::max({magnitude(v[0]), magnitude(v[1]), magnitude(v[2]), magnitude(light)}) + glm::length(light - v[0]);
+  const glm::dvec3 axes[4] = {glm::cross(v[1] - v[0], v[2] - v[0]), glm::cross(v[1] - v[0], light - v[0]),
+                              glm::cross(v[2] - v[1], light - v[1]), glm::cross(v[0] - v[2], light - v[2])};
+  return Region(points, 4, axes, 4, kShadowEntryMargin * scale);
+}
+
+// A region around hull(box, light): the box of all nine points and the three axes across the
+// box-to-light direction.
+Region boxHull(const glm::vec3& bmin, const glm::vec3& bmax, const glm::dvec3& light) {
+  const glm::dvec3 b0(bmin), b1(bmax);
+  glm::dvec3 points[9];
+  for (int k = 0; k < 8; ++k) points[k] = glm::dvec3(k & 1 ? b1.x : b0.x, k & 2 ? b1.y : b0.y, k & 4 ? b1.z : b0.z);
+  points[8] = light;
+  const glm::dvec3 d = light - 0.5 * (b0 + b1);
+  const double scale =
+      std::max({magnitude(b0), magnitude(b1), magnitude(light)}) + glm::length(d) + glm::length(b1 - b0);
+  const glm::dvec3 axes[3] = {glm::cross(glm::dvec3(1, 0, 0), d), glm::cross(glm::dvec3(0, 1, 0), d),
+                              glm::cross(glm::dvec3(0, 0, 1), d)};
+  return Region(points, 9, axes, 3, kShadowEntryMargin * scale);
+}
+
+constexpr int kMaxEntries = static_cast<int>(gpu::kShadowEntryMax);
+
+struct Entry {
+  std::uint32_t ref = gpu::kBvhNoRef;
+  glm::vec3 min{0.0f}, max{0.0f};
+  float area = -1.0f; // of the box, for the order of opening; -1: not to be opened (a leaf, or no room)
+};
+
+Entry entry(std::uint32_t ref, const glm::vec3& min, const glm::vec3& max) {
+  Entry e{ref, min, max, -1.0f};
+  if (ref < gpu::kBvhLeafFlag) {
+    const glm::vec3 d = max - min;
+    e.area = d.x * d.y + d.y * d.z + d.z * d.x;
+  }
+  return e;
+}
+
+// A set of at most kMaxEntries subtrees that together hold every primitive a region may meet.
+struct EntrySet {
+  std::array<Entry, kMaxEntries> e;
+  int n = 0;
+};
+
+double diagonal(const glm::vec3& min, const glm::vec3& max) {
+  return glm::length(glm::dvec3(max) - glm::dvec3(min));
+}
+
+// Refines `set`, which covers a region holding `region`, to cover `region` alone: entries it
+// misses are dropped, then the largest entry is opened (replaced by those of its children the
+// region meets) while the set has room. An entry is never dropped for want of room, so the set
+// stays conservative.
+//
+// An entry costs every ray a step, since its box was tested against the region, not the ray: from
+// a node a step tests both children against the ray, from the two children as entries it takes
+// two steps whatever the ray. Opening a node with one child in the region saves a step; opening
+// one with both pays only where the rays hit both children, which they do where the children are
+// large against the rays' source (`source`: the diagonal of the triangle or subtree box they
+// leave). So a node grows the set only where each child's box is at least that large: a large
+// triangle, a floor under a scene, keeps a set no larger than a walk from the root needs.
+void refine(const Region& region, const std::vector<gpu::BvhWideNode>& nodes, EntrySet& set, double source) {
+  int kept = 0;
+  for (int i = 0; i < set.n; ++i) {
+    if (region.meets(set.e[i].min, set.e[i].max)) {
+      set.e[kept] = set.e[i];
+      set.e[kept].area = entry(set.e[i].ref, set.e[i].min, set.e[i].max).area;
+      ++kept;
+    }
+  }
+  set.n = kept;
+  while (true) {
+    int pick = -1;
+    float best = -1.0f;
+    for (int i = 0; i < set.n; ++i) {
+      if (set.e[i].area > best) {
+        best = set.e[i].area;
+        pick = i;
+      }
+    }
+    if (pick < 0) break;
+    const gpu::BvhWideNode& node = nodes[set.e[pick].ref];
+    const bool in0 = region.meets(node.min0, node.max0);
+    const bool in1 = region.meets(node.min1, node.max1);
+    const bool grows = in0 && in1;
+    if (set.n - 1 + int(in0) + int(in1) > kMaxEntries ||
+        (grows && std::min(diagonal(node.min0, node.max0), diagonal(node.min1, node.max1)) < source)) {
+      set.e[pick].area = -1.0f; // no room to open it, or no gain
+      continue;
+    }
+    set.e[pick] = set.e[set.n - 1];
+    --set.n;
+    if (in0) set.e[set.n++] = entry(node.ref0, node.min0, node.max0);
+    if (in1) set.e[set.n++] = entry(node.ref1, node.min1, node.max1);
+  }
+}
+
+// The two texels of a set: the entry nearest `near` to start at (an occluder close to the
+// surface ends the walk soonest), the farthest at the bottom of the stack.
+std::array<glm::uvec4, 2> pack(EntrySet set, const glm::dvec3& near) {
+  auto distance = [&](const Entry& e) {
+    return glm::length(glm::clamp(near, glm::dvec3(e.min), glm::dvec3(e.max)) - near);
+  };
+  std::sort(set.e.begin(), set.e.begin() + set.n,
+            [&](const Entry& a, const Entry& b) { return distance(a) < distance(b); });
+  std::array<std::uint32_t, 8> words;
+  words.fill(gpu::kBvhNoRef);
+  if (set.n > 0) words[0] = set.e[0].ref;
+  for (int i = 1; i < set.n; ++i) words[i] = set.e[set.n - i].ref;
+  words[7] = static_cast<std::uint32_t>(std::max(set.n - 1, 0));
+  return {glm::uvec4(words[0], words[1], words[2], words[3]), glm::uvec4(words[4], words[5], words[6], words[7])};
+}
+
+glm::dvec3 vertex(const glm::vec4& v) {
+  return glm::dvec3(glm::vec3(v));
+}
+
+// One light's part of the table, built top down from the root.
+struct Builder {
+  const ShadowEntryInput& in;
+  const ShadowEntryOptions& options;
+  const std::vector<std::uint32_t>& leaves; // leaves under each interior record
+  std::vector<glm::uvec4>& table;
+
+  std::uint32_t leafCount(std::uint32_t ref) const { return ref >= gpu::kBvhLeafFlag ? 1u : leaves[ref]; }
+
+  void write(std::uint32_t triangle, std::size_t light, const std::array<glm::uvec4, 2>& texels) const {
+    const std::size_t at = 2 * (triangle * in.lights.size() + light);
+    table[at] = texels[0];
+    table[at + 1] = texels[1];
+  }
+
+  // Calls f(triangle index) for every triangle under `ref`.
+  template <typename F> void forTriangles(std::uint32_t ref, F&& f) const {
+    if (ref < gpu::kBvhLeafFlag) {
+      forTriangles(in.nodes[ref].ref0, f);
+      forTriangles(in.nodes[ref].ref1, f);
+      return;
+    }
+    const std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
+    const std::uint32_t end = first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u;
+    for (std::uint32_t k = first; k < end; ++k) {
+      const std::uint32_t prim = in.primRefs[k];
+      if ((prim >> gpu::kPrimKindShift) == gpu::kPrimTriangle) f(prim & gpu::kPrimIndexMask);
+    }
+  }
+
+  // `set` covers the region of the node's parent; `tasks` (the top of the tree) collects the
+  // nodes at `splitDepth` instead of descending into them, for the threads.
+  struct Task {
+    std::uint32_t ref;
+    glm::vec3 min, max;
+    EntrySet set;
+  };
+  void visit(std::uint32_t ref, const glm::vec3& bmin, const glm::vec3& bmax, EntrySet set, std::size_t light,
+             int depth, int splitDepth, std::vector<Task>* tasks) const {
+    if (tasks != nullptr && depth == splitDepth) {
+      tasks->push_back({ref, bmin, bmax, set});
+      return;
+    }
+    const glm::dvec3 p = in.lights[light];
+    refine(boxHull(bmin, bmax, p), in.nodes, set, diagonal(bmin, bmax));
+    const bool leaf = ref >= gpu::kBvhLeafFlag;
+    if (options.shareBelow > 0 && leafCount(ref) <= options.shareBelow) {
+      const auto texels = pack(set, 0.5 * (glm::dvec3(bmin) + glm::dvec3(bmax)));
+      forTriangles(ref, [&](std::uint32_t t) { write(t, light, texels); });
+      return;
+    }
+    if (leaf) {
+      forTriangles(ref, [&](std::uint32_t t) {
+        const gpu::Triangle& tri = in.triangles[t];
+        const glm::dvec3 v[3] = {vertex(tri.v0), vertex(tri.v1), vertex(tri.v2)};
+        EntrySet own = set;
+        refine(triangleHull(v, p), in.nodes, own,
+               std::max({glm::length(v[1] - v[0]), glm::length(v[2] - v[1]), glm::length(v[0] - v[2])}));
+        write(t, light, pack(own, (v[0] + v[1] + v[2]) / 3.0));
+      });
+      return;
+    }
+    const gpu::BvhWideNode& node = in.nodes[ref];
+    visit(node.ref0, node.min0, node.max0, set, light, depth + 1, splitDepth, tasks);
+    visit(node.ref1, node.min1, node.max1, set, light, depth + 1, splitDepth, tasks);
+  }
+};
+
+} // namespace
+
+std::vector<glm::uvec4> shadowEntryTable(const ShadowEntryInput& in, const ShadowEntryOptions& options) {
+  const std::size_t pairs = in.triangles.size() * in.lights.size();
+  std::vector<glm::uvec4> table(2 * pairs, glm::uvec4(gpu::kBvhNoRef, gpu::kBvhNoRef, gpu::kBvhNoRef, 0u));
+  if (pairs == 0 || in.root == gpu::kBvhNoRef) return table;
+
+  // Leaves under each record: the records are flattened depth first, children after their parent.
+  std::vector<std::uint32_t> leaves(in.nodes.size(), 0u);
+  for (std::size_t i = in.nodes.size(); i-- > 0;) {
+    auto count = [&](std::uint32_t ref) { return ref >= gpu::kBvhLeafFlag ? 1u : leaves[ref]; };
+    leaves[i] = count(in.nodes[i].ref0) + count(in.nodes[i].ref1);
+  }
+  Builder builder{in, options, leaves, table};
+
+  // The top of the tree on this thread, the subtrees below splitDepth shared among the workers.
+  int threads = options.threads > 0 ? options.threads : static_cast<int>(std::thread::hardware_concurrency());
+  threads = std::max(1, std::min<int>(threads, static_cast<int>(in.triangles.size() / 2048) + 1));
+  const int splitDepth = threads > 1 ? 6 : -1;
+  std::vector<Builder::Task> tasks;
+  std::vector<std::size_t> taskLight;
+  for (std::size_t l = 0; l < in.lights.size(); ++l) {
+    EntrySet start;
+    start.e[0] = entry(in.root, in.rootBox.min, in.rootBox.max);
+    start.n = 1;
+    builder.visit(in.root, in.rootBox.min, in.rootBox.max, start, l, 0, splitDepth, &tasks);
+    taskLight.resize(tasks.size(), l);
+  }
+  std::atomic<std::size_t> next{0};
+  auto work = [&] {
+    for (std::size_t i; (i = next.fetch_add(1)) < tasks.size();) {
+      const Builder::Task& t = tasks[i];
+      builder.visit(t.ref, t.min, t.max, t.set, taskLight[i], 0, -1, nullptr);
+    }
+  };
+  std::vector<std::thread> pool;
+  for (int w = 1; w < threads; ++w) pool.emplace_back(work);
+  work();
+  for (auto& th : pool) th.join();
+  return table;
+}
+
+std::vector<std::uint32_t> shadowEntryRefs(const glm::uvec4& a, const glm::uvec4& b) {
+  std::vector<std::uint32_t> refs;
+  if (a.x == gpu::kBvhNoRef) return refs;
+  refs.push_back(a.x);
+  const std::uint32_t stacked[6] = {a.y, a.z, a.w, b.x, b.y, b.z};
+  for (std::uint32_t i = 0; i < std::min<std::uint32_t>(b.w, 6u); ++i) refs.push_back(stacked[i]);
+  return refs;
+}
+
+} // namespace vkray
