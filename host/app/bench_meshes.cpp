@@ -428,13 +428,14 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
     if (!out) throw InputError(args.csv.string(), "cannot open for writing");
     out << "triangles,build_ms,nodes,depth,bytes_per_triangle,eye_ms,eye_cpu_ms,shadow_cpu_ms,eye_mrays,shadow_mrays,"
            "embree_build_ms,"
-           "embree_bytes_per_triangle,embree_eye_mrays,embree_shadow_mrays,render_eye_ms,render_eye_mrays\n";
+           "embree_bytes_per_triangle,embree_eye_mrays,embree_shadow_mrays,render_eye_ms,render_eye_mrays,"
+           "shadow_table_ms\n";
     for (const Row& r : rows) {
       out << r.triangles << ',' << r.buildMs << ',' << r.nodes << ',' << r.depth << ',' << r.bytesPerTriangle << ','
           << r.primaryMs << ',' << r.primaryCpuMs << ',' << r.shadowCpuMs << ',' << r.primaryMrays() << ','
           << r.shadowMrays() << ',' << r.embreeBuildMs << ',' << r.embreeBytesPerTriangle << ','
           << r.embreePrimaryMrays() << ',' << r.embreeShadowMrays() << ',' << r.renderMs << ',' << r.renderMrays()
-          << '\n';
+          << ',' << r.shadowTableMs << '\n';
     }
     std::printf("wrote %s\n", args.csv.string().c_str());
   }
