@@ -116,6 +116,42 @@ TEST_F(Cli, TimeLimitPrintsItsBudget) {
   EXPECT_TRUE(fs::exists(out));
 }
 
+// --shadow-entry-points: auto builds the table only when the render's samples pay for it, on
+// always, off never; --stats says which, and the picture is the same bytes every way.
+TEST_F(Cli, ShadowEntryPointsSayWhetherTheyWereBuiltAndChangeNothing) {
+  auto run = [&](const std::string& mode, const std::string& extra = "") {
+    fs::path out = dir_ / ("s-" + mode + ".pfm");
+    RunResult r = vkray("render '" + scene("meshes.json") + "' -o '" + out.string() +
+                        "' --width 64 --height 48 --stats --shadow-entry-points " + mode + extra);
+    EXPECT_EQ(r.exitCode, 0) << r.err;
+    auto at = r.out.find("shadow entry points: ");
+    EXPECT_NE(at, std::string::npos) << r.out;
+    std::string line = at == std::string::npos ? "" : r.out.substr(at, r.out.find('\n', at) - at);
+    return std::make_pair(line, slurp(out));
+  };
+  auto [onLine, on] = run("on");
+  auto [offLine, off] = run("off");
+  auto [autoLine, automatic] = run("auto");
+  auto [manyLine, many] = run("auto", " --spp 16");
+  EXPECT_EQ(onLine.rfind("shadow entry points: built in ", 0), 0u) << onLine;
+  EXPECT_NE(onLine.find("(5392 triangles x 2 lights)"), std::string::npos) << onLine;
+  EXPECT_EQ(offLine, "shadow entry points: off (--shadow-entry-points off)");
+  // 64 x 48 pixels, one sample each, for 5392 triangles: under 4 pixel samples per triangle.
+  EXPECT_NE(autoLine.find("not built (too few pixel samples per triangle"), std::string::npos) << autoLine;
+  // 16 samples: 49152 pixel samples, over 4 per triangle.
+  EXPECT_EQ(manyLine.rfind("shadow entry points: built in ", 0), 0u) << manyLine;
+  EXPECT_FALSE(on.empty());
+  EXPECT_EQ(on, off);
+  EXPECT_EQ(on, automatic);
+
+  RunResult bad = vkray("render '" + scene("meshes.json") + "' -o '" + (dir_ / "bad.png").string() +
+                        "' --shadow-entry-points sometimes");
+  EXPECT_NE(bad.exitCode, 0);
+  EXPECT_NE(bad.err.find("--shadow-entry-points"), std::string::npos) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+  EXPECT_FALSE(fs::exists(dir_ / "bad.png"));
+}
+
 TEST_F(Cli, WritesLinearPfm) {
   fs::path out = dir_ / "a.pfm";
   RunResult r = vkray("render '" + scene("showcase.json") + "' -o '" + out.string() + "' --width 16 --height 8 -q");
