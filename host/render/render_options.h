@@ -36,7 +36,8 @@ template <> struct EnumNames<SceneMemory> {
 // Whether shadow rays from triangles start their BVH walk at their (triangle, light)'s shadow entry
 // points (host/accel/shadow_entries.h; the same occluders either way). Auto: when the render traces
 // enough shadow rays per (triangle, light) to pay for building the table (Renderer::prepare,
-// shadowEntriesPay); On: always (where the scene allows one); Off: never.
+// shadowEntriesPay; on a GPU only for the viewer); On: always (where the scene allows one); Off:
+// never.
 enum class ShadowEntries { Auto, On, Off };
 template <> struct EnumNames<ShadowEntries> {
   static constexpr std::array<EnumName<ShadowEntries>, 3> values{
