@@ -125,6 +125,7 @@ double diagonal(const glm::vec3& min, const glm::vec3& max) {
 // leave). So a node grows the set only where each child's box is at least that large: a large
 // triangle, a floor under a scene, keeps a set no larger than a walk from the root needs.
 void refine(const Region& region, const std::vector<gpu::BvhWideNode>& nodes, EntrySet& set, double source) {
+  set.n = std::clamp(set.n, 0, kMaxEntries);
   int kept = 0;
   for (int i = 0; i < set.n; ++i) {
     if (region.meets(set.e[i].min, set.e[i].max)) {
@@ -163,11 +164,19 @@ void refine(const Region& region, const std::vector<gpu::BvhWideNode>& nodes, En
 // The two texels of a set: the entry nearest `near` to start at (an occluder close to the
 // surface ends the walk soonest), the farthest at the bottom of the stack.
 std::array<glm::uvec4, 2> pack(EntrySet set, const glm::dvec3& near) {
-  auto distance = [&](const Entry& e) {
-    return glm::length(glm::clamp(near, glm::dvec3(e.min), glm::dvec3(e.max)) - near);
-  };
-  std::sort(set.e.begin(), set.e.begin() + set.n,
-            [&](const Entry& a, const Entry& b) { return distance(a) < distance(b); });
+  // Insertion sort by distance: at most seven entries.
+  std::array<double, kMaxEntries> distance{};
+  for (int i = 0; i < set.n; ++i) {
+    const Entry e = set.e[i];
+    const double d = glm::length(glm::clamp(near, glm::dvec3(e.min), glm::dvec3(e.max)) - near);
+    int j = i;
+    for (; j > 0 && distance[j - 1] > d; --j) {
+      distance[j] = distance[j - 1];
+      set.e[j] = set.e[j - 1];
+    }
+    distance[j] = d;
+    set.e[j] = e;
+  }
   std::array<std::uint32_t, 8> words;
   words.fill(gpu::kBvhNoRef);
   if (set.n > 0) words[0] = set.e[0].ref;
@@ -270,6 +279,7 @@ std::vector<glm::uvec4> shadowEntryTable(const ShadowEntryInput& in, const Shado
   std::vector<Builder::Task> tasks;
   std::vector<std::size_t> taskLight;
   for (std::size_t l = 0; l < in.lights.size(); ++l) {
+    if (!in.casts[l]) continue; // the kernel traces no shadow rays to it
     EntrySet start;
     start.e[0] = entry(in.root, in.rootBox.min, in.rootBox.max);
     start.n = 1;

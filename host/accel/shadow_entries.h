@@ -42,11 +42,12 @@ struct ShadowEntryInput {
   const std::vector<std::uint32_t>& primRefs; // leaf entries: kind << kPrimKindShift | index
   const std::vector<gpu::Triangle>& triangles;
   const std::vector<glm::dvec3>& lights; // point lights in the triangles' frame
+  const std::vector<bool>& casts;        // per light: whether it casts shadows (else no entries for it)
 };
 
 // Two texels per (triangle, light), triangle-major: (start, stack 0, 1, 2) and (stack 3, 4, 5,
 // stack height), the stack's bottom first, kBvhNoRef where unused (gpu::ShadowStart). A triangle
-// no leaf refers to keeps (kBvhNoRef, ...): its shadow rays walk from the root.
+// no leaf refers to, and a light that casts no shadows, keep (kBvhNoRef, ...): from the root.
 std::vector<glm::uvec4> shadowEntryTable(const ShadowEntryInput& in, const ShadowEntryOptions& options = {});
 
 // The subtrees (references) a table entry names: the start and the stacked ones.

@@ -132,11 +132,17 @@ void buildShadowEntries(GpuScene& g, const ShadowEntryOptions& options) {
     return;
   const auto start = std::chrono::steady_clock::now();
   std::vector<glm::dvec3> lights;
-  for (const gpu::Light& l : g.lights) lights.emplace_back(glm::vec3(l.position));
+  std::vector<bool> casts;
+  for (const gpu::Light& l : g.lights) {
+    lights.emplace_back(glm::vec3(l.position));
+    casts.push_back(l.position.w != 0.0f);
+  }
+  if (std::find(casts.begin(), casts.end(), true) == casts.end()) return; // no shadow rays at all
   Aabb rootBox;
   rootBox.min = g.bvh.nodes[0].boundsMin;
   rootBox.max = g.bvh.nodes[0].boundsMax;
-  g.shadowEntries = shadowEntryTable({g.bvhNodes, g.bvhRoot, rootBox, g.bvh.primRefs, g.triangles, lights}, options);
+  g.shadowEntries =
+      shadowEntryTable({g.bvhNodes, g.bvhRoot, rootBox, g.bvh.primRefs, g.triangles, lights, casts}, options);
   g.shadowEntryMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 

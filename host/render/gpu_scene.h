@@ -65,8 +65,8 @@ struct GpuScene {
 GpuScene packScene(const Scene& scene, const glm::dvec3& origin, bool withBvh, const BvhOptions& bvhOptions = {});
 
 // Builds g.shadowEntries for every triangle and light (accel/shadow_entries.h) and times it in
-// g.shadowEntryMs; nothing where the scene has no BVH, no triangles, no lights or more than
-// gpu::kShadowEntryLightsMax lights.
+// g.shadowEntryMs; nothing where the scene has no BVH, no triangles, no light that casts shadows
+// or more than gpu::kShadowEntryLightsMax lights.
 void buildShadowEntries(GpuScene& g, const ShadowEntryOptions& options = {});
 
 // The BVH's input: one box per sphere, triangle and polygon of the packed scene, in float and
