@@ -125,7 +125,6 @@ double diagonal(const glm::vec3& min, const glm::vec3& max) {
 // leave). So a node grows the set only where each child's box is at least that large: a large
 // triangle, a floor under a scene, keeps a set no larger than a walk from the root needs.
 void refine(const Region& region, const std::vector<gpu::BvhWideNode>& nodes, EntrySet& set, double source) {
-  set.n = std::clamp(set.n, 0, kMaxEntries);
   int kept = 0;
   for (int i = 0; i < set.n; ++i) {
     if (region.meets(set.e[i].min, set.e[i].max)) {

@@ -138,11 +138,8 @@ void buildShadowEntries(GpuScene& g, const ShadowEntryOptions& options) {
     casts.push_back(l.position.w != 0.0f);
   }
   if (std::find(casts.begin(), casts.end(), true) == casts.end()) return; // no shadow rays at all
-  Aabb rootBox;
-  rootBox.min = g.bvh.nodes[0].boundsMin;
-  rootBox.max = g.bvh.nodes[0].boundsMax;
-  g.shadowEntries =
-      shadowEntryTable({g.bvhNodes, g.bvhRoot, rootBox, g.bvh.primRefs, g.triangles, lights, casts}, options);
+  g.shadowEntries = shadowEntryTable(
+      {g.bvhNodes, g.bvhRoot, nodeBounds(g.bvh.nodes[0]), g.bvh.primRefs, g.triangles, lights, casts}, options);
   g.shadowEntryMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
 }
 

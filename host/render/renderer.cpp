@@ -566,19 +566,19 @@ bool Renderer::prepareShadowEntries(const RenderSettings& settings, const Render
   const std::uint64_t texels = 4ull * g.bvhNodes.size() + 2ull * g.triangles.size() * g.lights.size();
   if (texels > context_.info().maxTexelBufferElements || texels * sizeof(glm::uvec4) > kShadowEntryBudget)
     return skip("none (the table would not fit one texel buffer)");
-  if (options.shadowEntryPoints == ShadowEntries::Auto && !options.progressive && context_.info().type != "CPU") {
-    // The rule below was measured on lavapipe. A GPU traces a shadow ray in a small fraction of
-    // the table's build time per triangle, so only a render without end (the viewer) recovers it.
-    return skip("not built (on a GPU one render's shadow rays do not pay for it; --shadow-entry-points on builds it)");
-  }
-  if (options.shadowEntryPoints == ShadowEntries::Auto) {
-    // The viewer accumulates without end; a progressive render takes at least minSpp samples.
+  if (options.shadowEntryPoints == ShadowEntries::Auto && !options.progressive) {
+    // The viewer accumulates without end and always builds it. The rule below was measured on
+    // lavapipe; a GPU traces a shadow ray in a small fraction of the table's build time per
+    // triangle, so there only a render without end recovers it.
+    if (context_.info().type != "CPU")
+      return skip("not built (on a GPU one render's shadow rays do not pay for it; --shadow-entry-points on builds "
+                  "it)");
+    // A progressive render takes at least minSpp samples.
     const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
     const std::uint64_t pixels =
         static_cast<std::uint64_t>(settings.width) * (rowEnd > options.rowBegin ? rowEnd - options.rowBegin : 0u);
-    const double samples = options.progressive                    ? 1e30
-                           : progressiveRender(settings, options) ? std::max(1, settings.minSpp)
-                                                                  : std::max(1, settings.spp);
+    const double samples =
+        progressiveRender(settings, options) ? std::max(1, settings.minSpp) : std::max(1, settings.spp);
     if (!shadowEntriesPay(g.triangles.size(), samples, pixels))
       return skip("not built (too few pixel samples per triangle to pay for it; --shadow-entry-points on builds it)");
   }

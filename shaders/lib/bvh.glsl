@@ -33,13 +33,14 @@ void leafPrimitive(uint entry, out uint kind, out uint index) {
   }
 }
 
-// A shadow ray's entry points (host/accel/shadow_entries.h) when it leaves triangle `triangle` for
-// light `light`: the two texels of gpu_types.h's layout. From the root (x kBvhNoRef) where the
-// scene has no table or the ray leaves another kind of surface.
+// A walk that starts at the root (traverseBvh's shadowStart for every other ray).
 ShadowStart fromTheRoot() {
   return ShadowStart(uvec4(kBvhNoRef), uvec4(kBvhNoRef, kBvhNoRef, kBvhNoRef, 0u));
 }
 
+// A shadow ray's entry points (host/accel/shadow_entries.h) when it leaves triangle `triangle` for
+// light `light`: the two texels of gpu_types.h's layout. From the root (x kBvhNoRef) where the
+// scene has no table or the ray leaves another kind of surface.
 ShadowStart shadowEntryPoints(uint kind, uint triangle, uint light) {
   if (!SHADOW_ENTRIES || kind != kPrimTriangle || frame.shadowEntryBase == 0u) return fromTheRoot();
   int texel = int(frame.shadowEntryBase + 2u * (triangle * frame.shadowEntryLights + light));
