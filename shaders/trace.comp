@@ -322,7 +322,8 @@ void flushStats() {
 // A progressive pass (host/render/adaptive.h): the host lists the pixels still open, (x, y) as
 // floats, so SIMD lanes stay full however few remain. Two texels per entry: (sum rgb, samples) and
 // (sum rgb of the pass's first half, rays traced): the samples whose sequence index is below
-// pc.splitBase. From the halves of its passes the host estimates each pixel's standard error.
+// pc.splitBase. From the halves of its passes the host estimates each pixel's standard error. The
+// passes before the first decision run as one, with two texels per entry for each of them.
 //
 // `pc.param` lanes (a power of two; 1 when the dispatch takes one sample per pixel) share one entry
 // and trace its samples side by side, lane j sample j of each round: late passes list scattered
@@ -343,39 +344,68 @@ void listPass() {
   loadEntryPoints(pixel, 0u); // the host found them for the whole image, per lane's own tile
   uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
   uint count = opaqueUniform(pc.sampleCount);
-  uint split = opaqueUniform(pc.splitBase); // samples below it also go into the first half's sum
-  // The sums start from the entry's earlier dispatches of this pass: each sample is added to the
-  // running sum one at a time, in the sequence's order, whether the host gave a dispatch one sample
-  // or several and however many lanes traced them, so the float rounding (and the image) does not
-  // depend on how the host split the pass.
-  vec4 first = vec4(0.0);
-  vec4 second = vec4(0.0);
-  if ((opaqueUniform(pc.flags) & kFlagAccumulate) != 0u) {
-    first = imageLoad(imageTexels, int(2u * entry));
-    second = imageLoad(imageTexels, int(2u * entry + 1u));
+  // Up to three of the schedule's passes in this one (pc.segmentEnd0/1), each summed on its own, in
+  // two texels per entry and pass: (sum rgb, samples) and (sum rgb of the pass's first half, rays).
+  uint end0 = opaqueUniform(pc.segmentEnd0), end1 = opaqueUniform(pc.segmentEnd1);
+  uint passes = end0 == 0u ? 1u : (end1 == 0u ? 2u : 3u);
+  if (end0 == 0u) end0 = 0xFFFFFFFFu;
+  if (end1 == 0u) end1 = 0xFFFFFFFFu;
+  uint out0 = 2u * entry * passes; // the entry's first texel
+  bool writes = listed && lane == 0u;
+  uint base = opaqueUniform(pc.sampleBase);
+  uint current = base < end0 ? 0u : (base < end1 ? 1u : 2u); // the pass of the dispatch's first sample
+  // The sums of that pass start from the entry's earlier dispatches where it began in one of them:
+  // each sample is added to its pass's running sum one at a time, in the sequence's order, whether
+  // the host gave a dispatch one sample or several and however many lanes traced them, so the float
+  // rounding (and the image) does not depend on how the host split the pass.
+  uint began = current == 0u ? 0u : (current == 1u ? end0 : end1); // pass 0: the host's flag says
+  bool resume = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u && (current == 0u || began < base);
+  vec4 sum = vec4(0.0);
+  vec4 firstHalf = vec4(0.0);
+  if (resume) {
+    sum = imageLoad(imageTexels, int(out0 + 2u * current));
+    firstHalf = imageLoad(imageTexels, int(out0 + 2u * current + 1u));
   }
+  // One turn per pass, each with its own loop over its samples, so that the common case, one pass,
+  // runs the loop it always did.
   uint round0 = 0u; // this round's first sample
-  while (true) {    // tested at the bottom, as in sampleSum
-    uint k = round0 + lane;
-    vec3 radiance = vec3(0.0);
-    if (listed && k < count) {
-      vec2 lensUv = THIN_LENS ? lensSample(pc.sampleBase + k, hashPcg(index)) : vec2(0.0);
-      radiance = traceSample(pixel, sobolOwenSample(pc.sampleBase + k, hashPcg(index)), lensUv);
-    }
-    if (lanes == 1u) {
-      first.rgb += radiance;
-      if (pc.sampleBase + k < split) second.rgb += radiance;
-    } else {
-      for (uint j = 0u; j < lanes; ++j) {
-        vec3 r = subgroupShuffle(radiance, firstLane + j);
-        if (round0 + j < count) {
-          first.rgb += r;
-          if (pc.sampleBase + round0 + j < split) second.rgb += r;
+  while (true) {
+    uint passEnd = min(count, (current == 0u ? end0 : (current == 1u ? end1 : 0xFFFFFFFFu)) - base);
+    uint split = current == 0u ? opaqueUniform(pc.splitBase)
+                               : (current == 1u ? opaqueUniform(pc.splitBase1) : opaqueUniform(pc.splitBase2));
+    uint passFirst = round0;
+    while (true) { // tested at the bottom, as in sampleSum
+      uint k = round0 + lane;
+      vec3 radiance = vec3(0.0);
+      if (listed && k < passEnd) {
+        vec2 lensUv = THIN_LENS ? lensSample(base + k, hashPcg(index)) : vec2(0.0);
+        radiance = traceSample(pixel, sobolOwenSample(base + k, hashPcg(index)), lensUv);
+      }
+      if (lanes == 1u) {
+        sum.rgb += radiance;
+        if (base + k < split) firstHalf.rgb += radiance;
+      } else {
+        for (uint j = 0u; j < lanes; ++j) {
+          vec3 r = subgroupShuffle(radiance, firstLane + j);
+          if (round0 + j < passEnd) {
+            sum.rgb += r;
+            if (base + round0 + j < split) firstHalf.rgb += r;
+          }
         }
       }
+      round0 += lanes;
+      if (round0 >= passEnd) break;
     }
-    round0 += lanes;
+    sum.w += float(passEnd - passFirst);
+    round0 = passEnd; // a pass's samples need not fill its last round
     if (round0 >= count) break;
+    if (writes) {
+      imageStore(imageTexels, int(out0 + 2u * current), sum);
+      imageStore(imageTexels, int(out0 + 2u * current + 1u), firstHalf);
+    }
+    sum = vec4(0.0);
+    firstHalf = vec4(0.0);
+    current++;
   }
   uint rays = COUNT_STATS ? gCount.eyeRays + gCount.shadowRays + gCount.reflectionRays + gCount.refractionRays : 0u;
   if (COUNT_STATS && lanes > 1u) {
@@ -383,11 +413,10 @@ void listPass() {
     rays = 0u;
     for (uint j = 0u; j < lanes; ++j) rays += subgroupShuffle(own, firstLane + j);
   }
-  if (listed && lane == 0u) {
-    first.w += float(count);
-    second.w += float(rays);
-    imageStore(imageTexels, int(2u * entry), first);
-    imageStore(imageTexels, int(2u * entry + 1u), second);
+  if (writes) {
+    firstHalf.w += float(rays); // all of the dispatch's, with its last pass's sums (the host adds them up)
+    imageStore(imageTexels, int(out0 + 2u * current), sum);
+    imageStore(imageTexels, int(out0 + 2u * current + 1u), firstHalf);
   }
 }
 

@@ -214,6 +214,30 @@ TEST(Progressive, ThresholdScheduleDoublesUpToTheCap) {
   EXPECT_EQ(nextPassSamples(s, 16, 0, 0.0, 0.0), 0u); // nothing open
 }
 
+TEST(Progressive, PassesBeforeTheFirstDecisionRunAsOne) {
+  RenderSettings s;
+  s.noiseThreshold = 0.01;
+  s.minSpp = 16;
+  s.maxSpp = 100;
+  using Passes = std::vector<std::uint32_t>;
+  EXPECT_EQ(nextPasses(s, 0, 10, 0.0, 0.0, true), (Passes{4, 4, 8})); // then the first decision
+  EXPECT_EQ(nextPasses(s, 16, 10, 0.0, 0.0, true), (Passes{16}));     // one pass per decision after it
+  EXPECT_EQ(nextPasses(s, 64, 10, 0.0, 0.0, true), (Passes{36}));     // the cap
+  EXPECT_EQ(nextPasses(s, 0, 10, 0.0, 0.0, false), (Passes{4}));      // apart, as the schedule lists them
+  EXPECT_TRUE(nextPasses(s, 100, 10, 0.0, 0.0, true).empty());
+  s.minSpp = 6; // 1, 1, 2 and 4 before the first decision: the first three run as one
+  EXPECT_EQ(nextPasses(s, 0, 10, 0.0, 0.0, true), (Passes{1, 1, 2}));
+  EXPECT_EQ(nextPasses(s, 4, 10, 0.0, 0.0, true), (Passes{4}));
+  s.minSpp = 1; // a decision after every pass
+  EXPECT_EQ(nextPasses(s, 0, 10, 0.0, 0.0, true), (Passes{1}));
+  s.minSpp = 16;
+  s.maxSpp = 8; // the cap comes first (refused at load; the schedule still holds)
+  EXPECT_EQ(nextPasses(s, 0, 10, 0.0, 0.0, true), (Passes{4, 4}));
+  s.maxSpp = 100;
+  s.timeLimit = 1.0; // a time limit may stop between them: apart
+  EXPECT_EQ(nextPasses(s, 0, 10, 0.0, 0.0, true), (Passes{4}));
+}
+
 TEST(Progressive, DecisionsFollowTheSchedule) {
   RenderSettings s;
   EXPECT_EQ(decisionCount(s), 0u); // no threshold, no decisions
@@ -393,6 +417,35 @@ TEST(RenderProgressive, LanesSharingAPixelChangeNothing) {
   // Each pixel's rays, summed over its lanes, add up to the render's.
   EXPECT_EQ(std::accumulate(shared.pixels.rays.begin(), shared.pixels.rays.end(), 0.0),
             static_cast<double>(shared.stats.total()));
+}
+
+TEST(RenderProgressive, PassesRunAsOneChangeNothing) {
+  // The passes before the first decision (4, 4 and 8 samples) run as one list pass that reports each
+  // on its own, in one dispatch or (as a driver that cuts loops short needs) one sample per dispatch,
+  // with lanes sharing a pixel on this glass scene: the same sums in the same order as three passes,
+  // so the same image bit for bit and the same samples, rays and error estimates per pixel.
+  Scene s = noisyScene();
+  s.render.noiseThreshold = 0.003;
+  s.render.maxSpp = 64;
+  RenderOptions o;
+  o.pixelStats = true;
+  RenderResult together = render(s, o);
+  o.oneSamplePerDispatch = true;
+  RenderResult perSample = render(s, o);
+  o.firstPassesTogether = false;
+  RenderResult apart = render(s, o);
+  for (const RenderResult* r : {&perSample, &apart}) {
+    ASSERT_EQ(together.image.pixels.size(), r->image.pixels.size());
+    EXPECT_EQ(0, std::memcmp(together.image.pixels.data(), r->image.pixels.data(),
+                             together.image.pixels.size() * sizeof(glm::vec3)));
+    EXPECT_EQ(together.pixels.samples, r->pixels.samples);
+    EXPECT_EQ(together.pixels.rays, r->pixels.rays);
+    EXPECT_EQ(together.pixels.error, r->pixels.error);
+    EXPECT_EQ(together.stats.total(), r->stats.total());
+    EXPECT_EQ(together.progressive.passes, r->progressive.passes); // the schedule's passes
+  }
+  ASSERT_GT(together.progressive.converged, 0.2) << "the first decision closed pixels";
+  ASSERT_LT(together.progressive.converged, 1.0) << "and left some open";
 }
 
 TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) {

@@ -180,6 +180,24 @@ std::uint32_t nextPassSamples(const RenderSettings& s, std::uint32_t samplesSoFa
   return k;
 }
 
+std::vector<std::uint32_t> nextPasses(const RenderSettings& s, std::uint32_t samplesSoFar, std::size_t openPixels,
+                                      double msPerSample, double spentMs, bool together) {
+  std::vector<std::uint32_t> passes;
+  std::uint32_t k = nextPassSamples(s, samplesSoFar, openPixels, msPerSample, spentMs);
+  if (k == 0) return passes;
+  passes.push_back(k);
+  if (!together || !(s.noiseThreshold > 0.0) || s.timeLimit > 0.0) return passes;
+  std::uint32_t samples = samplesSoFar + k;
+  // A decision follows the pass that brings every pixel to min_spp.
+  while (passes.size() < kPassesAtOnceMax && samples < static_cast<std::uint32_t>(s.minSpp)) {
+    k = nextPassSamples(s, samples, openPixels, msPerSample, spentMs);
+    if (k == 0) break;
+    passes.push_back(k);
+    samples += k;
+  }
+  return passes;
+}
+
 std::uint32_t decisionCount(const RenderSettings& s) {
   if (!(s.noiseThreshold > 0.0)) return 0;
   RenderSettings noLimit = s;

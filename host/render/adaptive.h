@@ -127,6 +127,17 @@ void checkProgressiveMemory(std::uint32_t width, std::uint32_t height, std::uint
 std::uint32_t nextPassSamples(const RenderSettings& settings, std::uint32_t samplesSoFar, std::size_t openPixels,
                               double msPerSample, double spentMs);
 
+// The most passes of the schedule one list pass takes at once (trace.comp, listPass).
+constexpr std::size_t kPassesAtOnceMax = 3;
+
+// The samples of each pass of the schedule that the next list pass takes: nextPassSamples' pass
+// alone, or with `together`, under a noise threshold and without a time limit, every pass before the
+// first decision (min_spp / 4, min_spp / 4 and min_spp / 2; at most kPassesAtOnceMax). Nothing is
+// decided between them, so running them as one changes no sum; it saves each pixel the fixed cost of
+// two passes. A time limit keeps them apart, to stop between them. Empty: no pass.
+std::vector<std::uint32_t> nextPasses(const RenderSettings& settings, std::uint32_t samplesSoFar,
+                                      std::size_t openPixels, double msPerSample, double spentMs, bool together);
+
 // How many times a render with these settings decides which pixels stay open (at most): with a
 // time limit the passes may stop sooner.
 std::uint32_t decisionCount(const RenderSettings& settings);

@@ -31,8 +31,9 @@ static_assert(offsetof(FrameParams, lightCount) == 160 && offsetof(FrameParams, 
 static_assert(offsetof(FrameParams, bvhRoot) == 172 && offsetof(FrameParams, triangleBoundsMin) == 176);
 static_assert(sizeof(RayStats) == 48);
 static_assert(sizeof(SceneUbo) <= 65536, "the packed scene must fit the smallest maxUniformBufferRange");
-static_assert(sizeof(PushConstants) == 52 && offsetof(PushConstants, pass) == 16 &&
-              offsetof(PushConstants, imageRow0) == 32 && offsetof(PushConstants, splitBase) == 48);
+static_assert(sizeof(PushConstants) == 68 && offsetof(PushConstants, pass) == 16 &&
+              offsetof(PushConstants, imageRow0) == 32 && offsetof(PushConstants, splitBase) == 48 &&
+              offsetof(PushConstants, splitBase2) == 64);
 static_assert(sizeof(TreeRay) == 112 && offsetof(TreeRay, what) == 80 && offsetof(TreeRay, where) == 96,
               "TreeRay: seven 16-byte members, as std430 lays them out");
 static_assert(sizeof(TreeRayHeader) == 16, "TreeRayBuffer: the records start 16 bytes in");

@@ -73,6 +73,11 @@ struct RenderOptions {
   // dispatch all of a pixel's samples and let lanes share a pixel. The image is the same bit for
   // bit; tests compare the two.
   bool oneSamplePerDispatch = false;
+  // Under a noise threshold, the passes before the first decision (min_spp / 4, min_spp / 4,
+  // min_spp / 2) run as one list pass that reports each on its own (nextPasses): the same sums,
+  // decisions and image, with one pass's fixed cost per pixel instead of three. Off: three passes,
+  // for tests to compare.
+  bool firstPassesTogether = true;
   // Rows of workgroups whose every eye ray provably meets nothing are filled with the background
   // instead of traced (render/row_culling.h; the image is the same). Off: --no-row-culling.
   bool cullRows = true;

@@ -239,9 +239,6 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   const double totalPixels = static_cast<double>(open.size());
   if (kernels_.entry) result.timings.traceMs += findEntryPointsOfTheWholeImage(settings);
 
-  // Two texels of output per entry; the list itself goes to the pass input (prevImage_).
-  const std::size_t capacity =
-      std::min<std::size_t>(static_cast<std::size_t>(imageWidth_) * imageRows_ / 2, prevImage_->size() / 16);
   auto start = Clock::now();
   double msPerSample = 0.0;  // GPU time per pixel-sample, measured
   std::uint32_t samples = 0; // of each open pixel
@@ -250,8 +247,15 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   std::vector<glm::vec4> list, sums;
   std::vector<std::uint32_t> order; // list position -> entry of the chunk (spreadGroups)
   while (true) {
-    const std::uint32_t k = nextPassSamples(settings, samples, open.size(), msPerSample, result.timings.traceMs);
-    if (k == 0) break;
+    // The passes before the first decision run as one list pass, which reports each on its own.
+    const std::vector<std::uint32_t> ks =
+        nextPasses(settings, samples, open.size(), msPerSample, result.timings.traceMs, options.firstPassesTogether);
+    if (ks.empty()) break;
+    const std::uint32_t k = std::accumulate(ks.begin(), ks.end(), 0u);
+    const auto together = static_cast<std::uint32_t>(ks.size());
+    // Two texels of output per entry and pass; the list itself goes to the pass input (prevImage_).
+    const std::size_t capacity = std::min<std::size_t>(
+        static_cast<std::size_t>(imageWidth_) * imageRows_ / (2 * together), prevImage_->size() / 16);
     double passMs = 0.0;
     for (std::size_t first = 0; first < open.size();) {
       if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
@@ -290,7 +294,16 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       push.pass = gpu::kPassList;
       push.tileSize = glm::uvec2(static_cast<std::uint32_t>(n), 1);
       push.param = lanes;
-      push.splitBase = samples + firstHalf(k); // the pass's two halves, for the error estimate
+      // Each pass's two halves, for the error estimate; the second and third pass where there are.
+      push.splitBase = samples + firstHalf(ks[0]);
+      if (together > 1) {
+        push.segmentEnd0 = samples + ks[0];
+        push.splitBase1 = push.segmentEnd0 + firstHalf(ks[1]);
+      }
+      if (together > 2) {
+        push.segmentEnd1 = push.segmentEnd0 + ks[1];
+        push.splitBase2 = push.segmentEnd1 + firstHalf(ks[2]);
+      }
       BandTimes t =
           submitBand(context_, timer_, "sampling", 0, settings.height, [&](const vk::raii::CommandBuffer& cmd) {
             cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
@@ -320,11 +333,12 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       msPerSample = t.gpuMs / (static_cast<double>(n) * k);
 
       auto readStart = Clock::now();
-      sums.resize(2 * n);
+      sums.resize(2 * together * n);
       image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
       for (std::size_t j = 0; j < n; ++j) {
         std::uint32_t i = open[first + order[j]];
-        acc.add(i % width, i / width, sums[2 * j], sums[2 * j + 1]);
+        for (std::size_t p = 2 * together * j; p < 2 * together * (j + 1); p += 2)
+          acc.add(i % width, i / width, sums[p], sums[p + 1]);
       }
       result.timings.readbackMs += msSince(readStart);
       first += n;
@@ -341,7 +355,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       }
     }
     samples += k;
-    ++passes;
+    passes += static_cast<int>(together); // the schedule's passes
     lastPassMs = passMs;
     // Decisions start once every pixel has min_spp samples (passes of a quarter, a quarter and a half).
     if (settings.noiseThreshold > 0.0 && samples >= static_cast<std::uint32_t>(settings.minSpp))

@@ -500,6 +500,15 @@ struct PushConstants {
   // The list pass: the sequence index where the pass's second half starts; the samples below it
   // also go into the first half's sum (host/render/adaptive.h).
   uint splitBase;
+  // A list pass may take up to three of the schedule's passes at once, each reported on its own
+  // (the passes before the first decision; Renderer::renderProgressive): the samples from
+  // segmentEnd0 on belong to the second, from segmentEnd1 on to the third (0: no such pass; a pass
+  // never starts at sample 0), and the second's and third's first halves end at splitBase1 and
+  // splitBase2.
+  uint segmentEnd0;
+  uint segmentEnd1;
+  uint splitBase1;
+  uint splitBase2;
 };
 
 // ---- The ray-tree recorder (kSpecRecordTree, shaders/lib/tree_record.glsl) ----------------------
