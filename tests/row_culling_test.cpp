@@ -119,8 +119,11 @@ TEST(RowCulling, AnEyeOnAPlaneOrInsideTheBoxCullsNothing) {
 // equal, on scenes with sky above them, for pixel-centre, stratified and adaptive sampling.
 TEST(RenderRowCulling, CulledRendersEqualTracedOnesBitForBit) {
   const char* scenes[] = {"showcase.json", "seed.json", "glass.json", "numerics-far-sphere.json"};
+  // The last: progressive passes, where the host adds the sums of the rows that see nothing.
   const char* settings[] = {R"("render": { "spp": 1 })", R"("render": { "spp": 3 })",
-                            R"("render": { "spp": 4, "antialiasing": "adaptive" })"};
+                            R"("render": { "spp": 4, "antialiasing": "adaptive" })",
+                            R"("render": { "noise_threshold": 0.01, "min_spp": 8, "max_spp": 64 })"};
+  std::uint32_t culledProgressive = 0;
   for (const char* name : scenes) {
     for (const char* s : settings) {
       SCOPED_TRACE(std::string(name) + " " + s);
@@ -140,8 +143,14 @@ TEST(RenderRowCulling, CulledRendersEqualTracedOnesBitForBit) {
       EXPECT_EQ(a.stats.reflection, b.stats.reflection);
       EXPECT_EQ(a.stats.refraction, b.stats.refraction);
       EXPECT_EQ(a.stats.refinedPixels, b.stats.refinedPixels);
+      // Per pixel (progressive renders keep them): the same samples, error estimates and rays.
+      EXPECT_EQ(a.pixels.samples, b.pixels.samples);
+      EXPECT_EQ(a.pixels.error, b.pixels.error);
+      EXPECT_EQ(a.pixels.rays, b.pixels.rays);
+      if (scene.render.noiseThreshold > 0.0) culledProgressive += a.timings.culledRows;
     }
   }
+  EXPECT_GT(culledProgressive, 0u) << "some progressive render had rows that see nothing";
   expectNoValidationMessages();
 }
 

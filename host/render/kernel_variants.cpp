@@ -108,8 +108,8 @@ KernelPlan planKernels(const Features& f, const RenderSettings& s, const RenderO
   }
   if (progressiveRender(s, o) && o.kernel == Kernel::Shade) {
     // Progressive passes over lists of open pixels (host/render/adaptive.h): one pipeline, with
-    // entry points found once for the whole image, and no row culling (a row that sees nothing
-    // converges in min_spp samples of one missed eye ray each).
+    // entry points found once for the whole image, and no fill kernel (the host adds the sums of
+    // rows that see nothing itself, Renderer::renderProgressive).
     plan.sample = key(o, false, false, true);
     plan.countStats = o.countStats;
     plan.entryPoints = f.useBvh && shape.hasBvh && o.entryPoints && !f.thinLens;

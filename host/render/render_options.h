@@ -133,7 +133,7 @@ struct RenderTimings {
   double traceWallMs = 0.0; // host wall time of the trace submissions
   double readbackMs = 0.0;
   int bands = 0;
-  std::uint32_t culledRows = 0; // rows of the sample pass filled with the background (row culling)
+  std::uint32_t culledRows = 0; // rows filled with the background, not traced (row culling)
   bool pipelineReused = false;
 };
 

@@ -239,6 +239,20 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   const double totalPixels = static_cast<double>(open.size());
   if (kernels_.entry) result.timings.traceMs += findEntryPointsOfTheWholeImage(settings);
 
+  // Rows whose every eye ray provably meets nothing (row culling, render/row_culling.h): each sample
+  // of their pixels is a miss of weight 1, the background, so the host adds their sums as the
+  // kernel would (in float, a sample at a time, each pass from zero; one eye ray per sample) and the
+  // passes list only the other pixels: the same sums, decisions and image, bit for bit.
+  std::vector<char> emptyRow(settings.height, 0);
+  if (options.cullRows && options.kernel == Kernel::Shade && !current_.thinLens)
+    for (const RowRun& run :
+         splitRows(cull_, width, settings.height, traceBegin, traceEnd - traceBegin, gpu::kWorkgroupSizeY))
+      if (run.empty) std::fill_n(emptyRow.begin() + run.row0, run.rows, char{1});
+  result.timings.culledRows =
+      static_cast<std::uint32_t>(std::count(emptyRow.begin() + rowBegin, emptyRow.begin() + rowEnd, char{1}));
+  const glm::vec3 background = glm::vec3(gpuScene_.background);
+  std::vector<std::uint32_t> traced; // the open pixels the pass lists
+
   auto start = Clock::now();
   double msPerSample = 0.0;  // GPU time per pixel-sample, measured
   std::uint32_t samples = 0; // of each open pixel
@@ -256,13 +270,35 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
     // Two texels of output per entry and pass; the list itself goes to the pass input (prevImage_).
     const std::size_t capacity = std::min<std::size_t>(
         static_cast<std::size_t>(imageWidth_) * imageRows_ / (2 * together), prevImage_->size() / 16);
+    // The open pixels of empty rows: their passes' sums (rgb, samples) and (first half, rays).
+    std::vector<glm::vec4> missSums;
+    for (std::uint32_t pass : ks) {
+      glm::vec3 sum(0.0f), half(0.0f);
+      for (std::uint32_t j = 0; j < pass; ++j) {
+        sum += background;
+        if (j < firstHalf(pass)) half += background;
+      }
+      missSums.push_back(glm::vec4(sum, static_cast<float>(pass)));
+      missSums.push_back(glm::vec4(half, options.countStats && pass == ks.back() ? static_cast<float>(k) : 0.0f));
+    }
+    traced.clear();
+    std::uint64_t missRays = 0;
+    for (std::uint32_t i : open) {
+      if (!emptyRow[i / width]) {
+        traced.push_back(i);
+        continue;
+      }
+      for (std::size_t p = 0; p < missSums.size(); p += 2) acc.add(i % width, i / width, missSums[p], missSums[p + 1]);
+      missRays += k;
+    }
+    if (options.countStats) result.stats.eye += missRays;
     double passMs = 0.0;
-    for (std::size_t first = 0; first < open.size();) {
+    for (std::size_t first = 0; first < traced.size();) {
       if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
       // A chunk of the list near the band budget at the measured speed (64 K entries per sample first).
       double want = msPerSample > 0.0 ? options.bandBudgetMs / (msPerSample * k) : 65536.0 / k;
       std::size_t n = std::clamp<std::size_t>(static_cast<std::size_t>(want), 4096, capacity);
-      n = std::min(n, open.size() - first);
+      n = std::min(n, traced.size() - first);
       list.resize(n);
       // Lanes of a subgroup share each listed pixel and trace its samples side by side
       // (trace.comp, listPass): late passes list scattered pixels, and a SIMD batch of one pixel's
@@ -285,7 +321,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       const std::uint32_t perDispatch = options.oneSamplePerDispatch ? 1u : samplesTogether_ ? k : perLane * lanes;
       spreadGroups(n, group / lanes, order);
       for (std::size_t j = 0; j < n; ++j) {
-        std::uint32_t i = open[first + order[j]];
+        std::uint32_t i = traced[first + order[j]];
         list[j] = glm::vec4(static_cast<float>(i % width), static_cast<float>(i / width), 0.0f, 0.0f);
       }
       prevImage_->write(list.data(), n * sizeof(glm::vec4));
@@ -336,7 +372,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       sums.resize(2 * together * n);
       image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
       for (std::size_t j = 0; j < n; ++j) {
-        std::uint32_t i = open[first + order[j]];
+        std::uint32_t i = traced[first + order[j]];
         for (std::size_t p = 2 * together * j; p < 2 * together * (j + 1); p += 2)
           acc.add(i % width, i / width, sums[p], sums[p + 1]);
       }
@@ -345,7 +381,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
 
       if (options.progress) {
         RenderProgress p;
-        const double closed = totalPixels - static_cast<double>(open.size() - first);
+        const double closed = totalPixels - static_cast<double>(traced.size() - first);
         p.fraction = settings.timeLimit > 0.0 ? std::min(1.0, result.timings.traceMs / (settings.timeLimit * 1e3))
                                               : closed / std::max(1.0, totalPixels);
         p.elapsedMs = msSince(start);
