@@ -261,9 +261,14 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   std::vector<glm::vec4> list, sums;
   std::vector<std::uint32_t> order; // list position -> entry of the chunk (spreadGroups)
   while (true) {
-    // The passes before the first decision run as one list pass, which reports each on its own.
+    // The passes before the first decision run as one list pass, which reports each on its own. A
+    // time limit budgets for the pixels the pass traces (at least one while any is open: the rows
+    // that see nothing cost no GPU time).
+    const auto costly = static_cast<std::size_t>(
+        std::count_if(open.begin(), open.end(), [&](std::uint32_t i) { return !emptyRow[i / width]; }));
+    const std::size_t budgeted = open.empty() ? 0 : std::max<std::size_t>(costly, 1);
     const std::vector<std::uint32_t> ks =
-        nextPasses(settings, samples, open.size(), msPerSample, result.timings.traceMs, options.firstPassesTogether);
+        nextPasses(settings, samples, budgeted, msPerSample, result.timings.traceMs, options.firstPassesTogether);
     if (ks.empty()) break;
     const std::uint32_t k = std::accumulate(ks.begin(), ks.end(), 0u);
     const auto together = static_cast<std::uint32_t>(ks.size());
