@@ -251,7 +251,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   result.timings.culledRows =
       static_cast<std::uint32_t>(std::count(emptyRow.begin() + rowBegin, emptyRow.begin() + rowEnd, char{1}));
   const glm::vec3 background = glm::vec3(gpuScene_.background);
-  std::vector<std::uint32_t> traced; // the open pixels the pass lists
+  std::vector<std::uint32_t> traced, missed; // the open pixels the pass lists, and those of empty rows
 
   auto start = Clock::now();
   double msPerSample = 0.0;  // GPU time per pixel-sample, measured
@@ -261,12 +261,13 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   std::vector<glm::vec4> list, sums;
   std::vector<std::uint32_t> order; // list position -> entry of the chunk (spreadGroups)
   while (true) {
+    traced.clear();
+    missed.clear();
+    for (std::uint32_t i : open) (emptyRow[i / width] ? missed : traced).push_back(i);
     // The passes before the first decision run as one list pass, which reports each on its own. A
     // time limit budgets for the pixels the pass traces (at least one while any is open: the rows
     // that see nothing cost no GPU time).
-    const auto costly = static_cast<std::size_t>(
-        std::count_if(open.begin(), open.end(), [&](std::uint32_t i) { return !emptyRow[i / width]; }));
-    const std::size_t budgeted = open.empty() ? 0 : std::max<std::size_t>(costly, 1);
+    const std::size_t budgeted = open.empty() ? 0 : std::max<std::size_t>(traced.size(), 1);
     const std::vector<std::uint32_t> ks =
         nextPasses(settings, samples, budgeted, msPerSample, result.timings.traceMs, options.firstPassesTogether);
     if (ks.empty()) break;
@@ -286,17 +287,9 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       missSums.push_back(glm::vec4(sum, static_cast<float>(pass)));
       missSums.push_back(glm::vec4(half, options.countStats && pass == ks.back() ? static_cast<float>(k) : 0.0f));
     }
-    traced.clear();
-    std::uint64_t missRays = 0;
-    for (std::uint32_t i : open) {
-      if (!emptyRow[i / width]) {
-        traced.push_back(i);
-        continue;
-      }
+    for (std::uint32_t i : missed)
       for (std::size_t p = 0; p < missSums.size(); p += 2) acc.add(i % width, i / width, missSums[p], missSums[p + 1]);
-      missRays += k;
-    }
-    if (options.countStats) result.stats.eye += missRays;
+    if (options.countStats) result.stats.eye += static_cast<std::uint64_t>(missed.size()) * k;
     double passMs = 0.0;
     for (std::size_t first = 0; first < traced.size();) {
       if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
