@@ -23,6 +23,16 @@ constexpr std::uint64_t kShadowEntryBudget = 512ull << 20;
 // The image window and the refine pass's copy are texel buffers of (sum rgb, samples).
 constexpr vk::Format kImageTexelFormat = vk::Format::eR32G32B32A32Sfloat;
 
+// The rows [begin, end) a render traces: options.rowBegin up to options.rowEnd (0: the image's
+// last row), within the image.
+struct RowWindow {
+  std::uint32_t begin, end;
+};
+RowWindow rowWindow(const RenderSettings& settings, const RenderOptions& options) {
+  const std::uint32_t end = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
+  return {std::min(options.rowBegin, end), end};
+}
+
 // Entry-point tiles (shaders/entry.comp) covering `rows` rows of a `width`-pixel image.
 std::uint32_t entryTileCount(std::uint32_t width, std::uint32_t rows) {
   return ((width + gpu::kEntryTileSize - 1) / gpu::kEntryTileSize) *
@@ -187,8 +197,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
 
   // A row window (a tile): adaptive AA's base pass also traces the row on each side that the refine
   // pass reads as neighbours, so the window's pixels are those of the whole image.
-  const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
-  const std::uint32_t rowBegin = std::min(options.rowBegin, rowEnd);
+  const auto [rowBegin, rowEnd] = rowWindow(settings, options);
   const std::uint32_t baseBegin = adaptive && rowBegin > 0 ? rowBegin - 1 : rowBegin;
   const std::uint32_t baseEnd = adaptive ? std::min(settings.height, rowEnd + 1) : rowEnd;
 
@@ -209,8 +218,7 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
 void Renderer::renderProgressive(const RenderSettings& settings, const RenderOptions& options, RenderResult& result) {
   checkProgressiveSettings(settings);
   const std::uint32_t width = settings.width;
-  const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
-  const std::uint32_t rowBegin = std::min(options.rowBegin, rowEnd);
+  const auto [rowBegin, rowEnd] = rowWindow(settings, options);
   // A tile under a noise threshold also traces a margin of rows on each side: a pixel's decision
   // reads its neighbours', whose decisions read theirs, so a difference at the margin's outer edge
   // (a neighbour not traced) moves one row inward per decision. With a margin as wide as there are
@@ -622,9 +630,8 @@ bool Renderer::prepareShadowEntries(const RenderSettings& settings, const Render
       return skip("not built (on a GPU one render's shadow rays do not pay for it; --shadow-entry-points on builds "
                   "it)");
     // A progressive render takes at least minSpp samples.
-    const std::uint32_t rowEnd = options.rowEnd == 0 ? settings.height : std::min(options.rowEnd, settings.height);
-    const std::uint64_t pixels =
-        static_cast<std::uint64_t>(settings.width) * (rowEnd > options.rowBegin ? rowEnd - options.rowBegin : 0u);
+    const RowWindow rows = rowWindow(settings, options);
+    const std::uint64_t pixels = static_cast<std::uint64_t>(settings.width) * (rows.end - rows.begin);
     const double samples =
         progressiveRender(settings, options) ? std::max(1, settings.minSpp) : std::max(1, settings.spp);
     if (!shadowEntriesPay(g.triangles.size(), samples, pixels))
