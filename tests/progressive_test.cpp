@@ -318,6 +318,17 @@ double percentile(std::vector<double> v, double q) {
   return v[std::min(v.size() - 1, static_cast<std::size_t>(q * static_cast<double>(v.size())))];
 }
 
+// Two renders of the same samples: the same image bit for bit, the same samples, rays and error
+// estimates per pixel, and the same rays in all.
+void expectTheSameRender(const RenderResult& a, const RenderResult& b) {
+  ASSERT_EQ(a.image.pixels.size(), b.image.pixels.size());
+  EXPECT_EQ(0, std::memcmp(a.image.pixels.data(), b.image.pixels.data(), a.image.pixels.size() * sizeof(glm::vec3)));
+  EXPECT_EQ(a.pixels.samples, b.pixels.samples);
+  EXPECT_EQ(a.pixels.rays, b.pixels.rays);
+  EXPECT_EQ(a.pixels.error, b.pixels.error);
+  EXPECT_EQ(a.stats.total(), b.stats.total());
+}
+
 // The 1024-sample reference, once per process.
 const Image& reference() {
   static const Image ref = uniform(noisyScene(), 1024);
@@ -407,13 +418,7 @@ TEST(RenderProgressive, LanesSharingAPixelChangeNothing) {
   o.oneSamplePerDispatch = true;
   RenderResult simple = render(s, o);
   ASSERT_GE(shared.progressive.sppMax, 64.0) << "passes of 32 samples and more, traced by 4 lanes or more";
-  ASSERT_EQ(shared.image.pixels.size(), simple.image.pixels.size());
-  EXPECT_EQ(0, std::memcmp(shared.image.pixels.data(), simple.image.pixels.data(),
-                           shared.image.pixels.size() * sizeof(glm::vec3)));
-  EXPECT_EQ(shared.pixels.samples, simple.pixels.samples);
-  EXPECT_EQ(shared.pixels.rays, simple.pixels.rays);
-  EXPECT_EQ(shared.pixels.error, simple.pixels.error);
-  EXPECT_EQ(shared.stats.total(), simple.stats.total());
+  expectTheSameRender(shared, simple);
   // Each pixel's rays, summed over its lanes, add up to the render's.
   EXPECT_EQ(std::accumulate(shared.pixels.rays.begin(), shared.pixels.rays.end(), 0.0),
             static_cast<double>(shared.stats.total()));
@@ -435,13 +440,7 @@ TEST(RenderProgressive, PassesRunAsOneChangeNothing) {
   o.firstPassesTogether = false;
   RenderResult apart = render(s, o);
   for (const RenderResult* r : {&perSample, &apart}) {
-    ASSERT_EQ(together.image.pixels.size(), r->image.pixels.size());
-    EXPECT_EQ(0, std::memcmp(together.image.pixels.data(), r->image.pixels.data(),
-                             together.image.pixels.size() * sizeof(glm::vec3)));
-    EXPECT_EQ(together.pixels.samples, r->pixels.samples);
-    EXPECT_EQ(together.pixels.rays, r->pixels.rays);
-    EXPECT_EQ(together.pixels.error, r->pixels.error);
-    EXPECT_EQ(together.stats.total(), r->stats.total());
+    expectTheSameRender(together, *r);
     EXPECT_EQ(together.progressive.passes, r->progressive.passes); // the schedule's passes
   }
   ASSERT_GT(together.progressive.converged, 0.2) << "the first decision closed pixels";
