@@ -197,7 +197,8 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
 
   // A row window (a tile): adaptive AA's base pass also traces the row on each side that the refine
   // pass reads as neighbours, so the window's pixels are those of the whole image.
-  const auto [rowBegin, rowEnd] = rowWindow(settings, options);
+  const RowWindow rows = rowWindow(settings, options);
+  const std::uint32_t rowBegin = rows.begin, rowEnd = rows.end;
   const std::uint32_t baseBegin = adaptive && rowBegin > 0 ? rowBegin - 1 : rowBegin;
   const std::uint32_t baseEnd = adaptive ? std::min(settings.height, rowEnd + 1) : rowEnd;
 
@@ -218,7 +219,9 @@ RenderResult Renderer::render(const Camera& camera, const RenderSettings& settin
 void Renderer::renderProgressive(const RenderSettings& settings, const RenderOptions& options, RenderResult& result) {
   checkProgressiveSettings(settings);
   const std::uint32_t width = settings.width;
-  const auto [rowBegin, rowEnd] = rowWindow(settings, options);
+  // Plain variables, not a structured binding: clang 15 does not let lambdas capture one.
+  const RowWindow rows = rowWindow(settings, options);
+  const std::uint32_t rowBegin = rows.begin, rowEnd = rows.end;
   // A tile under a noise threshold also traces a margin of rows on each side: a pixel's decision
   // reads its neighbours', whose decisions read theirs, so a difference at the margin's outer edge
   // (a neighbour not traced) moves one row inward per decision. With a margin as wide as there are
