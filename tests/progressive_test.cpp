@@ -116,6 +116,34 @@ TEST(Progressive, NeighbourhoodDecidesWhoStaysOpen) {
   EXPECT_EQ(img.stillOpen({2}, 0.5), (std::vector<std::uint32_t>{2}));
 }
 
+// A row of pixels whose samples all agree (no estimate of error: 0) beside a row of another colour,
+// as along a checker line that runs with the pixel rows: every block of the first rows' samples
+// missed whatever lies between. At the first decision such a pixel stays open while the contrast
+// of its 3 x 3 neighbourhood over its samples could hide more than half the threshold; a flat
+// neighbourhood closes as before, and later decisions do not ask.
+TEST(Progressive, FirstDecisionKeepsPixelsBesideContrastOpen) {
+  ProgressiveImage img(3, 3);
+  // Rows 0 and 1 at 0.2, row 2 at 0.6 (green 0.6 - 0.2 = 0.4 the largest channel's range); eight
+  // equal samples each, in passes of 2, 2 and 4.
+  for (std::uint32_t y = 0; y < 3; ++y)
+    for (std::uint32_t x = 0; x < 3; ++x)
+      for (std::uint32_t k : {2u, 2u, 4u}) {
+        const glm::vec3 c = y < 2 ? glm::vec3(0.2f) : glm::vec3(0.3f, 0.6f, 0.1f);
+        img.add(x, y, glm::vec4(c * float(k), float(k)), glm::vec4(c * float(firstHalf(k)), 1.0f));
+      }
+  ASSERT_EQ(ProgressiveImage::kFirstDecisionContrast, 0.5);
+  EXPECT_EQ(img.error(1, 0), 0.0);
+  EXPECT_NEAR(img.neighbourhoodContrast(1, 0), 0.0, 1e-7); // rows 0 and 1: flat
+  EXPECT_NEAR(img.neighbourhoodContrast(1, 1), 0.4, 1e-6); // beside row 2
+  EXPECT_NEAR(img.neighbourhoodContrast(0, 2), 0.4, 1e-6); // clipped at the corner
+  const std::vector<std::uint32_t> all{0, 1, 2, 3, 4, 5, 6, 7, 8};
+  // 0.4 / 8 samples = 0.05: open at the first decision below a threshold of 0.1, closed above it.
+  EXPECT_EQ(img.stillOpen(all, 0.09, true), (std::vector<std::uint32_t>{3, 4, 5, 6, 7, 8}));
+  EXPECT_TRUE(img.stillOpen(all, 0.11, true).empty());
+  // Every estimate is 0, so without the first decision's question every pixel closes.
+  EXPECT_TRUE(img.stillOpen(all, 0.09, false).empty());
+}
+
 // A tile's render stores only its rows (and margin): the same passes give the same estimates and
 // decisions as in the whole image, rows outside are black with no samples and no estimate.
 TEST(Progressive, RowsOfATileDecideAsInTheWholeImage) {
@@ -498,6 +526,44 @@ TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) 
   RenderResult again = render(s);
   EXPECT_EQ(again.image.pixels, a.image.pixels);
   EXPECT_EQ(again.pixels.samples, a.pixels.samples);
+}
+
+// The kernel's samples, through the renderer's passes: no pixel stops at min_spp where its 3 x 3
+// neighbourhood's contrast over min_spp (of the first min_spp samples' means, here from a uniform
+// render of those samples) is above kFirstDecisionContrast of the threshold, however noiseless its
+// own samples look; flat pixels do stop there. A loose threshold, so that the estimate alone would
+// close most edge pixels at the first decision.
+TEST(RenderProgressive, FirstDecisionWaitsBesideContrast) {
+  const double threshold = 0.03;
+  Scene s = noisyScene();
+  s.render.noiseThreshold = threshold;
+  s.render.minSpp = 8;
+  s.render.maxSpp = 64;
+  RenderResult a = render(s);
+  const Image first = uniform(noisyScene(), 8); // the same first 8 samples of every pixel
+  const std::uint32_t w = s.render.width, h = s.render.height;
+  int flatStopped = 0, heldBesideContrast = 0;
+  for (std::uint32_t y = 0; y < h; ++y) {
+    for (std::uint32_t x = 0; x < w; ++x) {
+      glm::vec3 lo(1e30f), hi(-1e30f);
+      for (std::uint32_t v = y > 0 ? y - 1 : 0; v <= std::min(h - 1, y + 1); ++v)
+        for (std::uint32_t u = x > 0 ? x - 1 : 0; u <= std::min(w - 1, x + 1); ++u) {
+          lo = glm::min(lo, first.pixels[v * w + u]);
+          hi = glm::max(hi, first.pixels[v * w + u]);
+        }
+      const double bound = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / 8.0;
+      const float n = a.pixels.samples[y * w + x];
+      // The kernel sums a pass at a time where the uniform render sums every sample: a margin of
+      // 1 % for the float rounding between them.
+      if (bound > 0.505 * threshold) {
+        EXPECT_GT(n, 8.0f) << x << ", " << y << ": contrast / 8 = " << bound;
+        heldBesideContrast += n > 8.0f;
+      }
+      if (bound < 0.1 * threshold && n == 8.0f) ++flatStopped;
+    }
+  }
+  EXPECT_GT(heldBesideContrast, 100);
+  EXPECT_GT(flatStopped, 1000);
 }
 
 TEST(RenderProgressive, TilesUnderAThresholdMergeIntoTheWholeRender) {

@@ -117,11 +117,32 @@ double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) co
   return std::sqrt(kOwnShare * own * own + (1.0 - kOwnShare) * sum / count);
 }
 
-std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::uint32_t>& open, double threshold) const {
+double ProgressiveImage::neighbourhoodContrast(std::uint32_t x, std::uint32_t y) const {
+  const std::uint32_t x0 = x > 0 ? x - 1 : 0, x1 = std::min(width_ - 1, x + 1);
+  const std::uint32_t y0 = y > rowBegin_ ? y - 1 : rowBegin_, y1 = std::min(rowEnd_ - 1, y + 1);
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
+  for (std::uint32_t v = y0; v <= y1; ++v) {
+    for (std::uint32_t u = x0; u <= x1; ++u) {
+      const PixelMoments& m = pixels_[index(u, v)];
+      if (m.samples <= 0.0f) continue; // never traced: no say
+      const glm::dvec3 mean = glm::dvec3(m.sum) / double(m.samples);
+      lo = glm::min(lo, mean);
+      hi = glm::max(hi, mean);
+    }
+  }
+  const glm::dvec3 range = hi - lo; // -inf where no pixel had samples
+  return std::max({range.r, range.g, range.b, 0.0});
+}
+
+std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::uint32_t>& open, double threshold,
+                                                       bool first) const {
   std::vector<std::uint32_t> next;
   for (std::uint32_t i : open) {
     const std::uint32_t x = i % width_, y = i / width_;
-    if (pixels_[index(x, y)].samples < 2.0f || !(neighbourhoodError(x, y) <= threshold)) next.push_back(i);
+    const double samples = pixels_[index(x, y)].samples;
+    const bool settled = samples >= 2.0 && neighbourhoodError(x, y) <= threshold &&
+                         (!first || neighbourhoodContrast(x, y) / samples <= kFirstDecisionContrast * threshold);
+    if (!settled) next.push_back(i);
   }
   return next;
 }

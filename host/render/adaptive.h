@@ -7,7 +7,9 @@
 // whole), never past max_spp. Once a pixel has min_spp samples, it stays open while its error,
 // blended with the RMS of the estimated standard errors over its 3 x 3 neighbourhood, is above the
 // noise threshold: one pixel's estimate has few degrees of freedom, and a pixel whose samples all
-// fell on one side of an edge looks noiseless where its neighbours do not.
+// fell on one side of an edge looks noiseless where its neighbours do not. At the first decision it
+// also stays open where its neighbourhood has the contrast to hide a feature all its samples missed
+// (kFirstDecisionContrast).
 //
 // The estimate compares the means of whole blocks of the sequence instead of the samples' own
 // variance: for a stratified sequence that variance overstates the error of their mean several
@@ -96,8 +98,21 @@ public:
   // (docs/progressive.md, "The estimate").
   static constexpr double kOwnShare = 0.8;
   double neighbourhoodError(std::uint32_t x, std::uint32_t y) const;
-  // Of `open` (row-major pixel indices), those whose neighbourhood error is above `threshold`.
-  std::vector<std::uint32_t> stillOpen(const std::vector<std::uint32_t>& open, double threshold) const;
+  // The largest, over R, G and B, of the range (max - min) of the means over the pixel's 3 x 3
+  // neighbourhood (pixels traced so far): the contrast a feature the pixel's samples missed could
+  // have with what they saw.
+  double neighbourhoodContrast(std::uint32_t x, std::uint32_t y) const;
+  // At the first decision a pixel stops only where neighbourhoodContrast / samples is also at most
+  // this share of the threshold. n samples of the Owen-scrambled Sobol sequence put one in every
+  // strip of 1/n of the pixel along either axis, so a feature they all missed (a checker line
+  // running along the pixel row) is thinner than 1/n of the pixel and moves its mean by at most
+  // about its contrast over n; the block estimate cannot see it, since every block missed it too.
+  // Later decisions have twice the samples or more (docs/progressive.md, "min_spp").
+  static constexpr double kFirstDecisionContrast = 0.5;
+  // Of `open` (row-major pixel indices), those whose neighbourhood error is above `threshold` (and,
+  // at the `first` decision, whose neighbourhood contrast could hide a missed feature).
+  std::vector<std::uint32_t> stillOpen(const std::vector<std::uint32_t>& open, double threshold,
+                                       bool first = false) const;
   Image image() const; // the whole image's means (black where a pixel has no samples)
   PixelStats stats() const;
 

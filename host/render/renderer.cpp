@@ -403,8 +403,9 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
     passes += static_cast<int>(together); // the schedule's passes
     lastPassMs = passMs;
     // Decisions start once every pixel has min_spp samples (passes of a quarter, a quarter and a half).
-    if (settings.noiseThreshold > 0.0 && samples >= static_cast<std::uint32_t>(settings.minSpp))
-      open = acc.stillOpen(open, settings.noiseThreshold);
+    const auto minSpp = static_cast<std::uint32_t>(settings.minSpp);
+    if (settings.noiseThreshold > 0.0 && samples >= minSpp)
+      open = acc.stillOpen(open, settings.noiseThreshold, samples - k < minSpp);
   }
   result.image = acc.image();
   result.pixels = acc.stats();
