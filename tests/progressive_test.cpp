@@ -119,7 +119,7 @@ TEST(Progressive, NeighbourhoodDecidesWhoStaysOpen) {
 // A row of pixels whose samples all agree (no estimate of error: 0) beside a row of another colour,
 // as along a checker line that runs with the pixel rows: every block of the first rows' samples
 // missed whatever lies between. At the first decision such a pixel stays open while the contrast
-// of its 3 x 3 neighbourhood over its samples could hide more than half the threshold; a flat
+// of its 3 x 3 neighbourhood over its samples could hide more than a quarter of the threshold; a flat
 // neighbourhood closes as before, and later decisions do not ask.
 TEST(Progressive, FirstDecisionKeepsPixelsBesideContrastOpen) {
   ProgressiveImage img(3, 3);
@@ -131,17 +131,17 @@ TEST(Progressive, FirstDecisionKeepsPixelsBesideContrastOpen) {
         const glm::vec3 c = y < 2 ? glm::vec3(0.2f) : glm::vec3(0.3f, 0.6f, 0.1f);
         img.add(x, y, glm::vec4(c * float(k), float(k)), glm::vec4(c * float(firstHalf(k)), 1.0f));
       }
-  ASSERT_EQ(ProgressiveImage::kFirstDecisionContrast, 0.5);
+  ASSERT_EQ(ProgressiveImage::kFirstDecisionContrast, 0.25);
   EXPECT_EQ(img.error(1, 0), 0.0);
   EXPECT_NEAR(img.neighbourhoodContrast(1, 0), 0.0, 1e-7); // rows 0 and 1: flat
   EXPECT_NEAR(img.neighbourhoodContrast(1, 1), 0.4, 1e-6); // beside row 2
   EXPECT_NEAR(img.neighbourhoodContrast(0, 2), 0.4, 1e-6); // clipped at the corner
   const std::vector<std::uint32_t> all{0, 1, 2, 3, 4, 5, 6, 7, 8};
-  // 0.4 / 8 samples = 0.05: open at the first decision below a threshold of 0.1, closed above it.
-  EXPECT_EQ(img.stillOpen(all, 0.09, true), (std::vector<std::uint32_t>{3, 4, 5, 6, 7, 8}));
-  EXPECT_TRUE(img.stillOpen(all, 0.11, true).empty());
+  // 0.4 / 8 samples = 0.05: open at the first decision below a threshold of 0.2, closed above it.
+  EXPECT_EQ(img.stillOpen(all, 0.19, true), (std::vector<std::uint32_t>{3, 4, 5, 6, 7, 8}));
+  EXPECT_TRUE(img.stillOpen(all, 0.21, true).empty());
   // Every estimate is 0, so without the first decision's question every pixel closes.
-  EXPECT_TRUE(img.stillOpen(all, 0.09, false).empty());
+  EXPECT_TRUE(img.stillOpen(all, 0.19, false).empty());
 }
 
 // A tile's render stores only its rows (and margin): the same passes give the same estimates and
@@ -555,11 +555,11 @@ TEST(RenderProgressive, FirstDecisionWaitsBesideContrast) {
       const float n = a.pixels.samples[y * w + x];
       // The kernel sums a pass at a time where the uniform render sums every sample: a margin of
       // 1 % for the float rounding between them.
-      if (bound > 0.505 * threshold) {
+      if (bound > 0.2525 * threshold) {
         EXPECT_GT(n, 8.0f) << x << ", " << y << ": contrast / 8 = " << bound;
         heldBesideContrast += n > 8.0f;
       }
-      if (bound < 0.1 * threshold && n == 8.0f) ++flatStopped;
+      if (bound < 0.05 * threshold && n == 8.0f) ++flatStopped;
     }
   }
   EXPECT_GT(heldBesideContrast, 100);

@@ -108,7 +108,7 @@ public:
   // running along the pixel row) is thinner than 1/n of the pixel and moves its mean by at most
   // about its contrast over n; the block estimate cannot see it, since every block missed it too.
   // Later decisions have twice the samples or more (docs/progressive.md, "min_spp").
-  static constexpr double kFirstDecisionContrast = 0.5;
+  static constexpr double kFirstDecisionContrast = 0.25;
   // Of `open` (row-major pixel indices), those whose neighbourhood error is above `threshold` (and,
   // at the `first` decision, whose neighbourhood contrast could hide a missed feature).
   std::vector<std::uint32_t> stillOpen(const std::vector<std::uint32_t>& open, double threshold,
