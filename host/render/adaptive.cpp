@@ -98,38 +98,37 @@ void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& su
   errors_[i] = static_cast<float>(standardError(m));
 }
 
-double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) const {
+template <class Visit> void ProgressiveImage::forTracedNeighbours(std::uint32_t x, std::uint32_t y, Visit visit) const {
   const std::uint32_t x0 = x > 0 ? x - 1 : 0, x1 = std::min(width_ - 1, x + 1);
   const std::uint32_t y0 = y > rowBegin_ ? y - 1 : rowBegin_, y1 = std::min(rowEnd_ - 1, y + 1);
-  double sum = 0.0;
-  int count = 0;
   for (std::uint32_t v = y0; v <= y1; ++v) {
     for (std::uint32_t u = x0; u <= x1; ++u) {
       // A neighbour never traced (outside the rendered rows) has no say.
       const std::size_t j = index(u, v);
-      if (pixels_[j].samples <= 0.0f) continue;
-      sum += double(errors_[j]) * errors_[j];
-      ++count;
+      if (pixels_[j].samples > 0.0f) visit(j);
     }
   }
+}
+
+double ProgressiveImage::neighbourhoodError(std::uint32_t x, std::uint32_t y) const {
+  double sum = 0.0;
+  int count = 0;
+  forTracedNeighbours(x, y, [&](std::size_t j) {
+    sum += double(errors_[j]) * errors_[j];
+    ++count;
+  });
   if (count == 0) return std::numeric_limits<double>::infinity();
   const double own = errors_[index(x, y)];
   return std::sqrt(kOwnShare * own * own + (1.0 - kOwnShare) * sum / count);
 }
 
 double ProgressiveImage::neighbourhoodContrast(std::uint32_t x, std::uint32_t y) const {
-  const std::uint32_t x0 = x > 0 ? x - 1 : 0, x1 = std::min(width_ - 1, x + 1);
-  const std::uint32_t y0 = y > rowBegin_ ? y - 1 : rowBegin_, y1 = std::min(rowEnd_ - 1, y + 1);
   glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-std::numeric_limits<double>::infinity());
-  for (std::uint32_t v = y0; v <= y1; ++v) {
-    for (std::uint32_t u = x0; u <= x1; ++u) {
-      const PixelMoments& m = pixels_[index(u, v)];
-      if (m.samples <= 0.0f) continue; // never traced: no say
-      const glm::dvec3 mean = glm::dvec3(m.sum) / double(m.samples);
-      lo = glm::min(lo, mean);
-      hi = glm::max(hi, mean);
-    }
-  }
+  forTracedNeighbours(x, y, [&](std::size_t j) {
+    const glm::dvec3 mean = glm::dvec3(pixels_[j].sum) / double(pixels_[j].samples);
+    lo = glm::min(lo, mean);
+    hi = glm::max(hi, mean);
+  });
   const glm::dvec3 range = hi - lo; // -inf where no pixel had samples
   return std::max({range.r, range.g, range.b, 0.0});
 }

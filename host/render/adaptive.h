@@ -120,6 +120,9 @@ private:
   std::size_t index(std::uint32_t x, std::uint32_t y) const {
     return static_cast<std::size_t>(y - rowBegin_) * width_ + x;
   }
+  // Calls visit(index) for each pixel of (x, y)'s 3 x 3 neighbourhood (itself included) that has
+  // been traced: inside the image and the stored rows, with samples.
+  template <class Visit> void forTracedNeighbours(std::uint32_t x, std::uint32_t y, Visit visit) const;
   std::uint32_t width_, height_, rowBegin_, rowEnd_;
   std::vector<PixelMoments> pixels_;
   std::vector<float> errors_; // standardError of each pixel, updated by add()
