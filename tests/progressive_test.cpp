@@ -331,6 +331,15 @@ Scene noisyScene() {
   return s;
 }
 
+// noisyScene under a noise threshold, with the min_spp and max_spp a test is written for.
+Scene thresholdScene(double threshold, int minSpp, int maxSpp) {
+  Scene s = noisyScene();
+  s.render.noiseThreshold = threshold;
+  s.render.minSpp = minSpp;
+  s.render.maxSpp = maxSpp;
+  return s;
+}
+
 Image uniform(Scene s, int spp) {
   s.render.spp = spp;
   return render(s).image;
@@ -437,9 +446,7 @@ TEST(RenderProgressive, LanesSharingAPixelChangeNothing) {
   // The simplest schedule, one sample of each listed pixel per dispatch and one invocation per
   // pixel, adds the same samples in the same order: the same image bit for bit, and the same
   // samples, rays and error estimates per pixel.
-  Scene s = noisyScene();
-  s.render.noiseThreshold = 0.003;
-  s.render.maxSpp = 128;
+  Scene s = thresholdScene(0.003, 16, 128);
   RenderOptions o;
   o.pixelStats = true;
   RenderResult shared = render(s, o);
@@ -453,13 +460,12 @@ TEST(RenderProgressive, LanesSharingAPixelChangeNothing) {
 }
 
 TEST(RenderProgressive, PassesRunAsOneChangeNothing) {
-  // The passes before the first decision (4, 4 and 8 samples) run as one list pass that reports each
-  // on its own, in one dispatch or (as a driver that cuts loops short needs) one sample per dispatch,
-  // with lanes sharing a pixel on this glass scene: the same sums in the same order as three passes,
-  // so the same image bit for bit and the same samples, rays and error estimates per pixel.
-  Scene s = noisyScene();
-  s.render.noiseThreshold = 0.003;
-  s.render.maxSpp = 64;
+  // The passes before the first decision (4, 4 and 8 samples, min_spp 16) run as one list pass that
+  // reports each on its own, in one dispatch or (as a driver that cuts loops short needs) one sample
+  // per dispatch, with lanes sharing a pixel on this glass scene (16 samples: two lanes): the same
+  // sums in the same order as three passes, so the same image bit for bit and the same samples, rays
+  // and error estimates per pixel.
+  Scene s = thresholdScene(0.003, 16, 64);
   RenderOptions o;
   o.pixelStats = true;
   RenderResult together = render(s, o);
@@ -477,10 +483,7 @@ TEST(RenderProgressive, PassesRunAsOneChangeNothing) {
 
 TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) {
   const double threshold = 0.004;
-  Scene s = noisyScene();
-  s.render.noiseThreshold = threshold;
-  s.render.minSpp = 8;
-  s.render.maxSpp = 512;
+  Scene s = thresholdScene(threshold, 8, 512);
   RenderResult a = render(s);
   const Image& ref = reference();
   std::vector<double> errors;
@@ -535,10 +538,7 @@ TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) 
 // close most edge pixels at the first decision.
 TEST(RenderProgressive, FirstDecisionWaitsBesideContrast) {
   const double threshold = 0.03;
-  Scene s = noisyScene();
-  s.render.noiseThreshold = threshold;
-  s.render.minSpp = 8;
-  s.render.maxSpp = 64;
+  Scene s = thresholdScene(threshold, 8, 64);
   RenderResult a = render(s);
   const Image first = uniform(noisyScene(), 8); // the same first 8 samples of every pixel
   const std::uint32_t w = s.render.width, h = s.render.height;
@@ -569,10 +569,7 @@ TEST(RenderProgressive, FirstDecisionWaitsBesideContrast) {
 TEST(RenderProgressive, TilesUnderAThresholdMergeIntoTheWholeRender) {
   // Each tile traces a margin of rows for its neighbours' decisions, so its rows are the whole
   // render's bit for bit, sample counts included.
-  Scene s = noisyScene();
-  s.render.noiseThreshold = 0.01;
-  s.render.minSpp = 4;
-  s.render.maxSpp = 64;
+  Scene s = thresholdScene(0.01, 4, 64);
   RenderResult whole = render(s);
   const std::uint32_t w = s.render.width, h = s.render.height;
   for (auto [begin, end] : {std::pair<std::uint32_t, std::uint32_t>{0, 25}, {25, 50}, {50, h}}) {
