@@ -118,30 +118,43 @@ TEST(Progressive, NeighbourhoodDecidesWhoStaysOpen) {
 
 // A row of pixels whose samples all agree (no estimate of error: 0) beside a row of another colour,
 // as along a checker line that runs with the pixel rows: every block of the first rows' samples
-// missed whatever lies between. At the first decision such a pixel stays open while the contrast
-// of its 3 x 3 neighbourhood over its samples could hide more than a quarter of the threshold; a flat
-// neighbourhood closes as before, and later decisions do not ask.
-TEST(Progressive, FirstDecisionKeepsPixelsBesideContrastOpen) {
+// missed whatever lies between. At the first decision, and at any before a pixel has 16 samples,
+// such a pixel stays open while the contrast of its 3 x 3 neighbourhood over its samples could hide
+// more than a quarter of the threshold; a flat neighbourhood closes as before. From 16 samples on
+// only a first decision asks.
+TEST(Progressive, EarlyDecisionsKeepPixelsBesideContrastOpen) {
   ProgressiveImage img(3, 3);
-  // Rows 0 and 1 at 0.2, row 2 at 0.6 (green 0.6 - 0.2 = 0.4 the largest channel's range); eight
-  // equal samples each, in passes of 2, 2 and 4.
-  for (std::uint32_t y = 0; y < 3; ++y)
-    for (std::uint32_t x = 0; x < 3; ++x)
-      for (std::uint32_t k : {2u, 2u, 4u}) {
-        const glm::vec3 c = y < 2 ? glm::vec3(0.2f) : glm::vec3(0.3f, 0.6f, 0.1f);
-        img.add(x, y, glm::vec4(c * float(k), float(k)), glm::vec4(c * float(firstHalf(k)), 1.0f));
-      }
-  ASSERT_EQ(ProgressiveImage::kFirstDecisionContrast, 0.25);
+  // Rows 0 and 1 at 0.2, row 2 at 0.6 (green 0.6 - 0.2 = 0.4 the largest channel's range); equal
+  // samples in passes of 2, 2 and 4, then one of 8.
+  auto passes = [&](std::initializer_list<std::uint32_t> ks) {
+    for (std::uint32_t y = 0; y < 3; ++y)
+      for (std::uint32_t x = 0; x < 3; ++x)
+        for (std::uint32_t k : ks) {
+          const glm::vec3 c = y < 2 ? glm::vec3(0.2f) : glm::vec3(0.3f, 0.6f, 0.1f);
+          img.add(x, y, glm::vec4(c * float(k), float(k)), glm::vec4(c * float(firstHalf(k)), 1.0f));
+        }
+  };
+  passes({2, 2, 4});
+  ASSERT_EQ(ProgressiveImage::kContrastShare, 0.25);
+  ASSERT_EQ(ProgressiveImage::kContrastGuardSamples, 16.0f);
   EXPECT_EQ(img.error(1, 0), 0.0);
   EXPECT_NEAR(img.neighbourhoodContrast(1, 0), 0.0, 1e-7); // rows 0 and 1: flat
   EXPECT_NEAR(img.neighbourhoodContrast(1, 1), 0.4, 1e-6); // beside row 2
   EXPECT_NEAR(img.neighbourhoodContrast(0, 2), 0.4, 1e-6); // clipped at the corner
   const std::vector<std::uint32_t> all{0, 1, 2, 3, 4, 5, 6, 7, 8};
-  // 0.4 / 8 samples = 0.05: open at the first decision below a threshold of 0.2, closed above it.
-  EXPECT_EQ(img.stillOpen(all, 0.19, true), (std::vector<std::uint32_t>{3, 4, 5, 6, 7, 8}));
-  EXPECT_TRUE(img.stillOpen(all, 0.21, true).empty());
-  // Every estimate is 0, so without the first decision's question every pixel closes.
-  EXPECT_TRUE(img.stillOpen(all, 0.19, false).empty());
+  const std::vector<std::uint32_t> beside{3, 4, 5, 6, 7, 8};
+  // 0.4 / 8 samples = 0.05: open below a threshold of 0.2, closed above it, at the first decision
+  // and at a later one alike (8 samples are fewer than 16).
+  for (bool first : {true, false}) {
+    EXPECT_EQ(img.stillOpen(all, 0.19, first), beside) << first;
+    EXPECT_TRUE(img.stillOpen(all, 0.21, first).empty()) << first;
+  }
+  // 16 samples: 0.4 / 16 = 0.025 holds them below a threshold of 0.1 at a first decision (min_spp
+  // 16); a later decision does not ask, and every estimate is 0, so every pixel closes.
+  passes({8});
+  EXPECT_EQ(img.stillOpen(all, 0.09, true), beside);
+  EXPECT_TRUE(img.stillOpen(all, 0.11, true).empty());
+  EXPECT_TRUE(img.stillOpen(all, 0.09, false).empty());
 }
 
 // A tile's render stores only its rows (and margin): the same passes give the same estimates and
@@ -531,39 +544,55 @@ TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) 
   EXPECT_EQ(again.pixels.samples, a.pixels.samples);
 }
 
-// The kernel's samples, through the renderer's passes: no pixel stops at min_spp where its 3 x 3
-// neighbourhood's contrast over min_spp (of the first min_spp samples' means, here from a uniform
-// render of those samples) is above kFirstDecisionContrast of the threshold, however noiseless its
-// own samples look; flat pixels do stop there. A loose threshold, so that the estimate alone would
-// close most edge pixels at the first decision.
-TEST(RenderProgressive, FirstDecisionWaitsBesideContrast) {
+// The kernel's samples, through the renderer's passes: no pixel stops at a decision before 16
+// samples where its 3 x 3 neighbourhood's contrast over its samples is above kContrastShare of the
+// threshold, however noiseless its own samples look; flat pixels do stop there. The neighbourhood's
+// means are those the decision saw, from uniform renders of the same first samples: 4 where a
+// neighbour had stopped at min_spp 4, 8 where it had not. A loose threshold, so that the estimate
+// alone would close most edge pixels at once. At min_spp 8 the first decision asks, at min_spp 4
+// both the first and the second.
+TEST(RenderProgressive, EarlyDecisionsWaitBesideContrast) {
   const double threshold = 0.03;
-  Scene s = thresholdScene(threshold, 8, 64);
-  RenderResult a = render(s);
-  const Image first = uniform(noisyScene(), 8); // the same first 8 samples of every pixel
-  const std::uint32_t w = s.render.width, h = s.render.height;
-  int flatStopped = 0, heldBesideContrast = 0;
-  for (std::uint32_t y = 0; y < h; ++y) {
-    for (std::uint32_t x = 0; x < w; ++x) {
-      glm::vec3 lo(1e30f), hi(-1e30f);
-      for (std::uint32_t v = y > 0 ? y - 1 : 0; v <= std::min(h - 1, y + 1); ++v)
-        for (std::uint32_t u = x > 0 ? x - 1 : 0; u <= std::min(w - 1, x + 1); ++u) {
-          lo = glm::min(lo, first.pixels[v * w + u]);
-          hi = glm::max(hi, first.pixels[v * w + u]);
+  const Image at4 = uniform(noisyScene(), 4), at8 = uniform(noisyScene(), 8); // every pixel's first samples
+  for (const int minSpp : {8, 4}) {
+    SCOPED_TRACE("min_spp " + std::to_string(minSpp));
+    Scene s = thresholdScene(threshold, minSpp, 64);
+    RenderResult a = render(s);
+    const std::uint32_t w = s.render.width, h = s.render.height;
+    auto samples = [&](std::uint32_t x, std::uint32_t y) { return a.pixels.samples[y * w + x]; };
+    int flatStopped = 0, heldBesideContrast = 0, secondDecisions = 0;
+    for (const float n : {4.0f, 8.0f}) {
+      if (n < float(minSpp)) continue;
+      for (std::uint32_t y = 0; y < h; ++y) {
+        for (std::uint32_t x = 0; x < w; ++x) {
+          if (samples(x, y) < n) continue; // closed at an earlier decision
+          glm::vec3 lo(1e30f), hi(-1e30f);
+          for (std::uint32_t v = y > 0 ? y - 1 : 0; v <= std::min(h - 1, y + 1); ++v)
+            for (std::uint32_t u = x > 0 ? x - 1 : 0; u <= std::min(w - 1, x + 1); ++u) {
+              const glm::vec3 mean = samples(u, v) < n ? at4.pixels[v * w + u]
+                                     : n == 4.0f       ? at4.pixels[v * w + u]
+                                                       : at8.pixels[v * w + u];
+              lo = glm::min(lo, mean);
+              hi = glm::max(hi, mean);
+            }
+          const double bound = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / n;
+          // The kernel sums a pass at a time where the uniform render sums every sample: a margin
+          // of 1 % for the float rounding between them.
+          if (bound > 0.2525 * threshold) {
+            EXPECT_GT(samples(x, y), n) << x << ", " << y << ": contrast / " << n << " = " << bound;
+            heldBesideContrast += samples(x, y) > n;
+          }
+          if (bound < 0.05 * threshold && samples(x, y) == n) ++flatStopped;
+          secondDecisions += n > float(minSpp) && samples(x, y) == n;
         }
-      const double bound = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z}) / 8.0;
-      const float n = a.pixels.samples[y * w + x];
-      // The kernel sums a pass at a time where the uniform render sums every sample: a margin of
-      // 1 % for the float rounding between them.
-      if (bound > 0.2525 * threshold) {
-        EXPECT_GT(n, 8.0f) << x << ", " << y << ": contrast / 8 = " << bound;
-        heldBesideContrast += n > 8.0f;
       }
-      if (bound < 0.05 * threshold && n == 8.0f) ++flatStopped;
+    }
+    EXPECT_GT(heldBesideContrast, 100);
+    EXPECT_GT(flatStopped, 1000);
+    if (minSpp == 4) {
+      EXPECT_GT(secondDecisions, 50) << "pixels that stopped at the second decision";
     }
   }
-  EXPECT_GT(heldBesideContrast, 100);
-  EXPECT_GT(flatStopped, 1000);
 }
 
 TEST(RenderProgressive, TilesUnderAThresholdMergeIntoTheWholeRender) {

@@ -74,7 +74,7 @@ struct BenchAdaptiveArgs {
   std::uint32_t height = 180;
   int referenceSpp = 1024;
   std::vector<double> thresholds{0.016, 0.008, 0.004, 0.002};
-  int minSpp = 8, maxSpp = 1024;              // the thresholds' min_spp and max_spp
+  int minSpp = 4, maxSpp = 1024;              // the thresholds' min_spp and max_spp
   int minUniformSpp = 4, maxUniformSpp = 256; // uniform sampling at the powers of two between
 };
 

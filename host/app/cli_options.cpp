@@ -107,7 +107,7 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
   app.add_option("--method", f.method, "backward (rays from the eye, default) or forward (photons from the lights)")
       ->check(CLI::IsMember(enumNameList<Method>()));
   app.add_option("--photons", f.photons, "forward: photons each light emits")->check(CLI::Range(1ll, kMaxPhotons));
-  app.add_option("--min-spp", f.minSpp, "progressive: samples every pixel gets first (default 8)")
+  app.add_option("--min-spp", f.minSpp, "progressive: samples every pixel gets first (default 4)")
       ->check(CLI::Range(1ll, kMaxSpp));
   app.add_option("--max-spp", f.maxSpp, "progressive: the most samples a pixel gets (default 1024)")
       ->check(CLI::Range(1ll, kMaxSpp));

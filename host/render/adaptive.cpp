@@ -138,9 +138,10 @@ std::vector<std::uint32_t> ProgressiveImage::stillOpen(const std::vector<std::ui
   std::vector<std::uint32_t> next;
   for (std::uint32_t i : open) {
     const std::uint32_t x = i % width_, y = i / width_;
-    const double samples = pixels_[index(x, y)].samples;
-    const bool settled = samples >= 2.0 && neighbourhoodError(x, y) <= threshold &&
-                         (!first || neighbourhoodContrast(x, y) / samples <= kFirstDecisionContrast * threshold);
+    const float samples = pixels_[index(x, y)].samples;
+    const bool guarded = first || samples < kContrastGuardSamples;
+    const bool settled = samples >= 2.0f && neighbourhoodError(x, y) <= threshold &&
+                         (!guarded || neighbourhoodContrast(x, y) / samples <= kContrastShare * threshold);
     if (!settled) next.push_back(i);
   }
   return next;

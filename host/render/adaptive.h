@@ -7,9 +7,9 @@
 // whole), never past max_spp. Once a pixel has min_spp samples, it stays open while its error,
 // blended with the RMS of the estimated standard errors over its 3 x 3 neighbourhood, is above the
 // noise threshold: one pixel's estimate has few degrees of freedom, and a pixel whose samples all
-// fell on one side of an edge looks noiseless where its neighbours do not. At the first decision it
-// also stays open where its neighbourhood has the contrast to hide a feature all its samples missed
-// (kFirstDecisionContrast).
+// fell on one side of an edge looks noiseless where its neighbours do not. At the first decision,
+// and at every decision before it has kContrastGuardSamples samples, it also stays open where its
+// neighbourhood has the contrast to hide a feature all its samples missed (kContrastShare).
 //
 // The estimate compares the means of whole blocks of the sequence instead of the samples' own
 // variance: for a stratified sequence that variance overstates the error of their mean several
@@ -102,15 +102,19 @@ public:
   // neighbourhood (pixels traced so far): the contrast a feature the pixel's samples missed could
   // have with what they saw.
   double neighbourhoodContrast(std::uint32_t x, std::uint32_t y) const;
-  // At the first decision a pixel stops only where neighbourhoodContrast / samples is also at most
-  // this share of the threshold. n samples of the Owen-scrambled Sobol sequence put one in every
-  // strip of 1/n of the pixel along either axis, so a feature they all missed (a checker line
-  // running along the pixel row) is thinner than 1/n of the pixel and moves its mean by at most
-  // about its contrast over n; the block estimate cannot see it, since every block missed it too.
-  // Later decisions have twice the samples or more (docs/progressive.md, "min_spp").
-  static constexpr double kFirstDecisionContrast = 0.25;
+  // A guarded decision stops a pixel only where neighbourhoodContrast / samples is also at most this
+  // share of the threshold. n samples of the Owen-scrambled Sobol sequence put one in every strip of
+  // 1/n of the pixel along either axis, so a feature they all missed (a checker line running along
+  // the pixel row) is thinner than 1/n of the pixel and moves its mean by at most about its contrast
+  // over n; the block estimate cannot see it, since every block missed it too.
+  static constexpr double kContrastShare = 0.25;
+  // The decisions that ask: the first, and every one before a pixel has this many samples. From 16
+  // samples on, the replayed tail of the error is where min_spp 16 without the question had it
+  // (docs/progressive.md, "min_spp").
+  static constexpr float kContrastGuardSamples = 16.0f;
   // Of `open` (row-major pixel indices), those whose neighbourhood error is above `threshold` (and,
-  // at the `first` decision, whose neighbourhood contrast could hide a missed feature).
+  // at the `first` decision or below kContrastGuardSamples, whose neighbourhood contrast could hide a
+  // missed feature).
   std::vector<std::uint32_t> stillOpen(const std::vector<std::uint32_t>& open, double threshold,
                                        bool first = false) const;
   Image image() const; // the whole image's means (black where a pixel has no samples)

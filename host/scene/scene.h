@@ -100,7 +100,7 @@ struct RenderSettings {
   // seconds of GPU time (0: none). Each pixel gets at least minSpp and at most maxSpp samples.
   double noiseThreshold = 0.0;
   double timeLimit = 0.0;
-  int minSpp = 8;
+  int minSpp = 4;
   int maxSpp = 1024;
   // Forward tracing (method forward): photons each light emits; 0: kDefaultPhotons, or with a time
   // limit as many as the time allows. A time limit may stop a given count sooner.
