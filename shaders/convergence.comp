@@ -64,10 +64,13 @@ void main() {
     if (inside) imageStore(errors, i, vec4(estimate(i)));
     return;
   }
-  // Step 1: the pixel's bin, and whether it has converged as adaptive.cpp's neighbourhoodError
-  // judges it: kConvergenceOwnShare of its own squared estimate, the rest of the mean square over
-  // the 3 x 3 pixels inside the image. Squares of estimates capped at 1e18, so that no estimate
-  // squares to +inf: one without an estimate (kNoEstimate) still never converges.
+  // Step 1: the pixel's bin, and whether it has converged as adaptive.cpp's stillOpen judges it:
+  // kConvergenceOwnShare of its own squared estimate, the rest of the mean square over the 3 x 3
+  // pixels inside the image (neighbourhoodError), and with fewer than
+  // kConvergenceContrastGuardSamples samples the range of those pixels' means, the largest channel,
+  // over the samples (neighbourhoodContrast). Squares of estimates capped at 1e18, so that no
+  // estimate squares to +inf: one without an estimate (kNoEstimate) still never converges. Every
+  // pixel of the view has the same samples.
   bool converged = false;
   bool unestimated = false;
   if (inside) {
@@ -75,18 +78,30 @@ void main() {
     unestimated = e >= kNoEstimate;
     float sum = 0.0;
     float count = 0.0;
+    float n = imageLoad(sums, i).w;
+    bool guarded = n < kConvergenceContrastGuardSamples;
+    vec3 lo = vec3(kNoEstimate), hi = vec3(-kNoEstimate);
     for (int dy = -1; dy <= 1; ++dy) {
       for (int dx = -1; dx <= 1; ++dx) {
         ivec2 q = pixel + ivec2(dx, dy);
         bool within = all(greaterThanEqual(q, ivec2(0))) && all(lessThan(q, ivec2(size)));
         ivec2 c = clamp(q, ivec2(0), ivec2(size) - 1);
-        float neighbour = min(imageLoad(errors, c.y * int(size.x) + c.x).r, 1e18);
+        int j = c.y * int(size.x) + c.x;
+        float neighbour = min(imageLoad(errors, j).r, 1e18);
         sum += within ? neighbour * neighbour : 0.0;
         count += within ? 1.0 : 0.0;
+        if (guarded) {
+          vec4 s = imageLoad(sums, j); // the clamped pixel is inside, and its range already counted
+          vec3 mean = s.rgb / max(s.w, 1.0);
+          lo = min(lo, mean);
+          hi = max(hi, mean);
+        }
       }
     }
     float own = min(e, 1e18);
     converged = kConvergenceOwnShare * own * own + (1.0 - kConvergenceOwnShare) * sum / count <= THRESHOLD * THRESHOLD;
+    vec3 range = hi - lo;
+    converged = converged && (!guarded || max(range.r, max(range.g, range.b)) / n <= kConvergenceContrastShare * THRESHOLD);
     if (!unestimated) {
       float bin = (log2(max(e, 1e-30)) - float(kHistogramLowLog2)) * float(kHistogramBinsPerOctave);
       uint b = uint(clamp(bin, 0.0, float(kHistogramBins - 1u)));

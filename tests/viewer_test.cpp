@@ -525,20 +525,27 @@ TEST_F(Viewer, AFlatSceneHasNoErrorAndHasConvergedEverywhere) {
 
 // The converged share is the headless stopping rule applied to the estimates the error map shows:
 // a pixel has converged when kOwnShare of its own squared estimate plus the rest of the mean square
-// over its 3 x 3 neighbourhood (inside the image) is at most the threshold squared
-// (host/render/adaptive.h).
+// over its 3 x 3 neighbourhood (inside the image) is at most the threshold squared, and, below
+// kContrastGuardSamples samples, the range of that neighbourhood's means (the largest channel) over
+// the samples is at most kContrastShare of the threshold (host/render/adaptive.h). The means come
+// from a headless render of the same 8 samples.
 TEST_F(Viewer, TheConvergedShareIsTheHeadlessRuleOnTheErrorMap) {
+  const double threshold = 0.01;
   fs::path shot = dir_ / "estimates.pfm";
   RunResult r = vkray("view '" + scene("showcase.json") + "' --width 64 --height 48 --frames 8 --display error " +
                       "--no-ray-counts --stats --validate --noise-threshold 0.01 --screenshot '" + shot.string() + "'");
   ASSERT_EQ(r.exitCode, 0) << r.err;
   Image e = readImage(shot);
   ASSERT_EQ(e.width, 64u);
-  std::size_t converged = 0;
+  Image means = render(scene("showcase.json"), "--width 64 --height 48 --spp 8", "u8.pfm");
+  ASSERT_EQ(means.pixels.size(), e.pixels.size());
+  ASSERT_LT(8.0f, ProgressiveImage::kContrastGuardSamples);
+  std::size_t converged = 0, quiet = 0;
   for (std::uint32_t y = 0; y < e.height; ++y) {
     for (std::uint32_t x = 0; x < e.width; ++x) {
       double sum = 0.0;
       int count = 0;
+      glm::dvec3 lo(1e30), hi(-1e30);
       for (int dy = -1; dy <= 1; ++dy) {
         for (int dx = -1; dx <= 1; ++dx) {
           const int u = int(x) + dx, v = int(y) + dy;
@@ -546,16 +553,22 @@ TEST_F(Viewer, TheConvergedShareIsTheHeadlessRuleOnTheErrorMap) {
           const double q = e.at(u, v).x;
           sum += q * q;
           ++count;
+          lo = glm::min(lo, glm::dvec3(means.at(u, v)));
+          hi = glm::max(hi, glm::dvec3(means.at(u, v)));
         }
       }
       const double own = e.at(x, y).x;
       const double ownShare = ProgressiveImage::kOwnShare;
-      converged += ownShare * own * own + (1.0 - ownShare) * sum / count <= 0.01 * 0.01;
+      const bool estimate = ownShare * own * own + (1.0 - ownShare) * sum / count <= threshold * threshold;
+      const double range = std::max({hi.x - lo.x, hi.y - lo.y, hi.z - lo.z});
+      quiet += estimate;
+      converged += estimate && range / 8.0 <= ProgressiveImage::kContrastShare * threshold;
     }
   }
   const double share = 100.0 * double(converged) / double(e.pixels.size());
   EXPECT_GT(share, 5.0);
   EXPECT_LT(share, 99.0) << "some pixels of the showcase are still noisy at 8 samples";
+  EXPECT_GT(quiet, converged + 50) << "the contrast rule holds pixels whose estimates alone would pass";
   // Float against double at the threshold may flip a pixel or two (each is 0.033 %).
   EXPECT_NEAR(statValue(r.out, "converged"), share, 0.07) << r.out;
 }

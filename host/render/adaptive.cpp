@@ -14,6 +14,8 @@ namespace vkray {
 
 // The viewer's converged share applies the same rule (shaders/convergence.comp).
 static_assert(static_cast<float>(ProgressiveImage::kOwnShare) == gpu::kConvergenceOwnShare);
+static_assert(static_cast<float>(ProgressiveImage::kContrastShare) == gpu::kConvergenceContrastShare);
+static_assert(ProgressiveImage::kContrastGuardSamples == gpu::kConvergenceContrastGuardSamples);
 
 void checkProgressiveSettings(const RenderSettings& s) {
   if (s.progressive() && s.minSpp > s.maxSpp) {

@@ -57,9 +57,13 @@ VKRAY_CONST(uint, kHistogramBinsPerOctave, 4u);
 VKRAY_CONST(int, kHistogramLowLog2, -24);
 VKRAY_CONST(uint, kHistogramWords, 132u); // kHistogramFirstBin + kHistogramBins
 // A pixel has converged when kConvergenceOwnShare of its own squared estimate plus the rest of the
-// mean square over its 3 x 3 neighbourhood is at most the threshold squared: the headless rule
-// (ProgressiveImage::kOwnShare, host/render/adaptive.h, which checks that the two agree).
+// mean square over its 3 x 3 neighbourhood is at most the threshold squared, and, with fewer than
+// kConvergenceContrastGuardSamples samples, the range of the neighbourhood's means over its samples
+// is at most kConvergenceContrastShare of the threshold: the headless rule (ProgressiveImage::kOwnShare,
+// kContrastGuardSamples and kContrastShare, host/render/adaptive.h, which checks that they agree).
 VKRAY_CONST(float, kConvergenceOwnShare, 0.8);
+VKRAY_CONST(float, kConvergenceContrastShare, 0.25);
+VKRAY_CONST(float, kConvergenceContrastGuardSamples, 16.0);
 
 // Push constants: uvec2(width, height) of the image.
 
