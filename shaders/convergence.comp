@@ -91,7 +91,7 @@ void main() {
         sum += within ? neighbour * neighbour : 0.0;
         count += within ? 1.0 : 0.0;
         if (guarded) {
-          vec4 s = imageLoad(sums, j); // the clamped pixel is inside, and its range already counted
+          vec4 s = imageLoad(sums, j); // a clamped pixel repeats one inside: the range stays as it is
           vec3 mean = s.rgb / max(s.w, 1.0);
           lo = min(lo, mean);
           hi = max(hi, mean);
