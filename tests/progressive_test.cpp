@@ -569,9 +569,9 @@ TEST(RenderProgressive, EarlyDecisionsWaitBesideContrast) {
           glm::vec3 lo(1e30f), hi(-1e30f);
           for (std::uint32_t v = y > 0 ? y - 1 : 0; v <= std::min(h - 1, y + 1); ++v)
             for (std::uint32_t u = x > 0 ? x - 1 : 0; u <= std::min(w - 1, x + 1); ++u) {
-              const glm::vec3 mean = samples(u, v) < n ? at4.pixels[v * w + u]
-                                     : n == 4.0f       ? at4.pixels[v * w + u]
-                                                       : at8.pixels[v * w + u];
+              // The decision at 4 saw 4 samples everywhere; the one at 8, 4 where a neighbour stopped.
+              const Image& seen = n == 4.0f || samples(u, v) < n ? at4 : at8;
+              const glm::vec3 mean = seen.pixels[v * w + u];
               lo = glm::min(lo, mean);
               hi = glm::max(hi, mean);
             }
