@@ -69,6 +69,7 @@ TEST_F(Cli, RendersAPngWithStatistics) {
     EXPECT_TRUE(stats.count(key)) << "missing statistic " << key;
   }
   EXPECT_EQ(stats["eye rays"], "3072");
+  EXPECT_FALSE(stats.count("decisions")) << "a uniform render has no progressive passes";
   // The sky above the showcase is filled, not traced (row culling): whole workgroup rows of it.
   int culled = std::stoi(stats["culled rows"]);
   EXPECT_GT(culled, 0);
@@ -102,6 +103,8 @@ TEST_F(Cli, NoiseThresholdPrintsWhatItReachedAndIsDeterministic) {
   EXPECT_EQ(stats["error estimate"].rfind("mean ", 0), 0u);
   EXPECT_NE(stats["converged pixels"].find(" %"), std::string::npos);
   EXPECT_NE(stats["trace"].find(" ms"), std::string::npos);
+  // The host's time between passes (deciding who stays open) has a line of its own.
+  EXPECT_NE(stats["decisions"].find(" ms"), std::string::npos) << r.out;
   ASSERT_EQ(vkray("render '" + scene("showcase.json") + "' -o '" + b.string() + flags).exitCode, 0);
   EXPECT_EQ(slurp(a), slurp(b));
 }

@@ -3,6 +3,7 @@
 // reference, that a noise threshold reaches its target with fewer rays than uniform sampling, is
 // deterministic and keeps its cap, and that a time limit holds.
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -18,6 +19,7 @@
 #include "test_support.h"
 #include "util/error.h"
 #include "util/host_memory.h"
+#include "util/parallel.h"
 
 namespace vkray::test {
 namespace {
@@ -155,6 +157,107 @@ TEST(Progressive, EarlyDecisionsKeepPixelsBesideContrastOpen) {
   EXPECT_EQ(img.stillOpen(all, 0.09, true), beside);
   EXPECT_TRUE(img.stillOpen(all, 0.11, true).empty());
   EXPECT_TRUE(img.stillOpen(all, 0.09, false).empty());
+}
+
+// The host's per-pixel loops run on every hardware thread (util/parallel.h): the ranges cover each
+// iteration exactly once, whatever the count and the threads, and a failure in any range reaches
+// the caller.
+TEST(ParallelFor, CoversEveryIterationOnce) {
+  for (std::size_t n : {0u, 1u, 7u, 1000u, 100003u})
+    for (unsigned threads : {1u, 2u, 3u, 8u})
+      for (std::size_t minPerThread : {std::size_t{1}, std::size_t{16384}}) {
+        std::vector<int> seen(n, 0);
+        std::vector<std::pair<std::size_t, std::size_t>> ranges(threads + 1);
+        std::atomic<std::size_t> calls{0};
+        parallelFor(
+            n, minPerThread,
+            [&](std::size_t begin, std::size_t end) {
+              ranges[calls++] = {begin, end};
+              for (std::size_t i = begin; i < end; ++i) ++seen[i];
+            },
+            threads);
+        EXPECT_TRUE(std::all_of(seen.begin(), seen.end(), [](int c) { return c == 1; })) << n << " " << threads;
+        // As many ranges as threads allow, each at least minPerThread long (one range below that).
+        const std::size_t expected = n == 0 ? 0 : std::clamp<std::size_t>(n / minPerThread, 1, threads);
+        EXPECT_EQ(calls.load(), expected) << n << " " << threads << " " << minPerThread;
+        for (std::size_t r = 0; r < calls.load() && expected > 1; ++r)
+          EXPECT_GE(ranges[r].second - ranges[r].first, minPerThread);
+      }
+}
+
+TEST(ParallelFor, RethrowsAfterEveryRangeEnds) {
+  std::atomic<int> finished{0};
+  EXPECT_THROW(parallelFor(
+                   4, 1,
+                   [&](std::size_t begin, std::size_t) {
+                     if (begin == 2) throw Error("range 2 failed");
+                     ++finished;
+                   },
+                   4),
+               Error);
+  EXPECT_EQ(finished.load(), 3);
+}
+
+// On an image large enough for the decisions to be split over threads, stillOpen keeps exactly the
+// pixels the rule keeps when asked pixel by pixel, in the list's order, at a first decision and a
+// later one; and two images fed the same passes, one pixel at a time and on threads, hold the same
+// moments and estimates.
+TEST(Progressive, DecisionsOnThreadsAreThePixelsOwn) {
+  const std::uint32_t w = 256, h = 160; // 40 960 pixels: more than two threads' worth
+  ASSERT_GT(std::size_t{w} * h, 2 * ProgressiveImage::kPixelsPerThread);
+  ProgressiveImage img(w, h), serial(w, h);
+  std::vector<std::uint32_t> all(std::size_t{w} * h);
+  std::iota(all.begin(), all.end(), 0u);
+  // A deterministic, uneven pattern: smooth shading, a stripe of contrast, noise that varies.
+  auto sample = [](std::uint32_t x, std::uint32_t y, std::uint32_t s) {
+    const std::uint32_t hash = (x * 73856093u) ^ (y * 19349663u) ^ (s * 83492791u);
+    const float noise = static_cast<float>(hash % 1000u) / 1000.0f * (x % 7 == 0 ? 0.5f : 0.02f);
+    return glm::vec3(0.1f + 0.001f * x + noise, y % 23 == 0 ? 0.9f : 0.3f, 0.001f * y);
+  };
+  auto addPass = [&](std::uint32_t first, std::uint32_t k) {
+    std::vector<std::pair<glm::vec4, glm::vec4>> sums(all.size());
+    for (std::uint32_t i : all) {
+      glm::vec4 sum(0.0f), half(0.0f);
+      for (std::uint32_t s = first; s < first + k; ++s) {
+        const glm::vec3 c = sample(i % w, i / w, s);
+        sum += glm::vec4(c, 1.0f);
+        if (s - first < firstHalf(k)) half += glm::vec4(c, 0.0f);
+      }
+      sums[i] = {sum, half + glm::vec4(0.0f, 0.0f, 0.0f, float(k))};
+      serial.add(i % w, i / w, sums[i].first, sums[i].second);
+    }
+    parallelFor(all.size(), ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t i = begin; i < end; ++i) img.add(i % w, i / w, sums[i].first, sums[i].second);
+    });
+  };
+  auto byPixel = [&](const std::vector<std::uint32_t>& open, double threshold, bool first) {
+    std::vector<std::uint32_t> kept;
+    for (std::uint32_t i : open) {
+      const std::uint32_t x = i % w, y = i / w;
+      const double n = img.at(x, y).samples;
+      const bool guarded = first || n < ProgressiveImage::kContrastGuardSamples;
+      if (!(img.neighbourhoodError(x, y) <= threshold &&
+            (!guarded || img.neighbourhoodContrast(x, y) / n <= ProgressiveImage::kContrastShare * threshold)))
+        kept.push_back(i);
+    }
+    return kept;
+  };
+  addPass(0, 1);
+  addPass(1, 1);
+  addPass(2, 2);
+  for (std::uint32_t y = 0; y < h; y += 7)
+    for (std::uint32_t x = 0; x < w; x += 5) {
+      ASSERT_EQ(std::memcmp(&img.at(x, y), &serial.at(x, y), sizeof(PixelMoments)), 0) << x << ", " << y;
+      ASSERT_EQ(img.error(x, y), serial.error(x, y));
+    }
+  std::vector<std::uint32_t> open = img.stillOpen(all, 0.01, true);
+  EXPECT_EQ(open, byPixel(all, 0.01, true));
+  EXPECT_GT(open.size(), all.size() / 10); // the rule keeps some and closes others
+  EXPECT_LT(open.size(), all.size() * 9 / 10);
+  addPass(4, 4);
+  std::vector<std::uint32_t> later = img.stillOpen(open, 0.01, false);
+  EXPECT_EQ(later, byPixel(open, 0.01, false));
+  EXPECT_LT(later.size(), open.size()) << open.size();
 }
 
 // A tile's render stores only its rows (and margin): the same passes give the same estimates and

@@ -288,6 +288,7 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
   // Rows whose eye rays provably miss everything, filled with the background instead of traced.
   std::printf("culled rows: %u of %u\n", result.timings.culledRows, scene.render.height);
   printStat("readback", result.timings.readbackMs);
+  if (result.progressive.passes > 0) printStat("decisions", result.timings.decideMs);
   printStat("write", writeMs);
   printStat("total", msSince(t0));
   if (scene.render.method == Method::Forward) {

@@ -86,8 +86,12 @@ public:
   std::uint32_t width() const { return width_; }
   std::uint32_t height() const { return height_; }
   // Adds one pass's sums of a pixel: (sum rgb, samples) and (sum rgb of the pass's first
-  // firstHalf(samples) samples, rays).
+  // firstHalf(samples) samples, rays). It writes that pixel's moments and estimate only, so calls
+  // for different pixels may run on different threads at once (the renderer adds a pass so).
   void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays);
+  // The fewest pixels worth a thread of their own in the host's per-pixel loops (parallelFor): a
+  // pixel's add or decision takes well under a microsecond, starting a thread tens of them.
+  static constexpr std::size_t kPixelsPerThread = 16384;
   const PixelMoments& at(std::uint32_t x, std::uint32_t y) const { return pixels_[index(x, y)]; }
   // standardError, as stored (in float).
   double error(std::uint32_t x, std::uint32_t y) const { return errors_[index(x, y)]; }
@@ -114,7 +118,8 @@ public:
   static constexpr float kContrastGuardSamples = 16.0f;
   // Of `open` (row-major pixel indices), those whose neighbourhood error is above `threshold` (and,
   // at the `first` decision or below kContrastGuardSamples, whose neighbourhood contrast could hide a
-  // missed feature).
+  // missed feature), in `open`'s order. Decided on every hardware thread (parallelFor) once the list
+  // is long enough: each decision only reads.
   std::vector<std::uint32_t> stillOpen(const std::vector<std::uint32_t>& open, double threshold,
                                        bool first = false) const;
   Image image() const; // the whole image's means (black where a pixel has no samples)

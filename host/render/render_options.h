@@ -131,7 +131,10 @@ struct RenderTimings {
   std::vector<PipelineBuild> pipelinesBuilt;
   double traceMs = 0.0;     // GPU time of the trace dispatches (timestamp queries)
   double traceWallMs = 0.0; // host wall time of the trace submissions
-  double readbackMs = 0.0;
+  double readbackMs = 0.0;  // reading results back, and adding a progressive pass's sums to the pixels'
+  // A progressive render's host time between passes: deciding which pixels stay open, and adding the
+  // sums of the rows that see nothing (the GPU waits meanwhile).
+  double decideMs = 0.0;
   int bands = 0;
   std::uint32_t culledRows = 0; // rows filled with the background, not traced (row culling)
   bool pipelineReused = false;

@@ -11,6 +11,7 @@
 #include "util/clock.h"
 #include "util/error.h"
 #include "util/host_memory.h"
+#include "util/parallel.h"
 
 namespace vkray {
 
@@ -272,6 +273,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
   std::vector<glm::vec4> list, sums;
   std::vector<std::uint32_t> order; // list position -> entry of the chunk (spreadGroups)
   while (true) {
+    auto decideStart = Clock::now();
     traced.clear();
     missed.clear();
     for (std::uint32_t i : open) (emptyRow[i / width] ? missed : traced).push_back(i);
@@ -298,9 +300,13 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       missSums.push_back(glm::vec4(sum, static_cast<float>(pass)));
       missSums.push_back(glm::vec4(half, options.countStats && pass == ks.back() ? static_cast<float>(k) : 0.0f));
     }
-    for (std::uint32_t i : missed)
-      for (std::size_t p = 0; p < missSums.size(); p += 2) acc.add(i % width, i / width, missSums[p], missSums[p + 1]);
+    parallelFor(missed.size(), ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
+      for (std::size_t j = begin; j < end; ++j)
+        for (std::size_t p = 0; p < missSums.size(); p += 2)
+          acc.add(missed[j] % width, missed[j] / width, missSums[p], missSums[p + 1]);
+    });
     if (options.countStats) result.stats.eye += static_cast<std::uint64_t>(missed.size()) * k;
+    result.timings.decideMs += msSince(decideStart);
     double passMs = 0.0;
     for (std::size_t first = 0; first < traced.size();) {
       if (options.cancel && options.cancel->load()) throw CancelledError("interrupted");
@@ -380,11 +386,14 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       auto readStart = Clock::now();
       sums.resize(2 * together * n);
       image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
-      for (std::size_t j = 0; j < n; ++j) {
-        std::uint32_t i = traced[first + order[j]];
-        for (std::size_t p = 2 * together * j; p < 2 * together * (j + 1); p += 2)
-          acc.add(i % width, i / width, sums[p], sums[p + 1]);
-      }
+      // Each entry is a pixel of its own: added on every hardware thread.
+      parallelFor(n, ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t j = begin; j < end; ++j) {
+          std::uint32_t i = traced[first + order[j]];
+          for (std::size_t p = 2 * together * j; p < 2 * together * (j + 1); p += 2)
+            acc.add(i % width, i / width, sums[p], sums[p + 1]);
+        }
+      });
       result.timings.readbackMs += msSince(readStart);
       first += n;
 
@@ -404,8 +413,11 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
     lastPassMs = passMs;
     // Decisions start once every pixel has min_spp samples (passes of a quarter, a quarter and a half).
     const auto minSpp = static_cast<std::uint32_t>(settings.minSpp);
-    if (settings.noiseThreshold > 0.0 && samples >= minSpp)
+    if (settings.noiseThreshold > 0.0 && samples >= minSpp) {
+      decideStart = Clock::now();
       open = acc.stillOpen(open, settings.noiseThreshold, samples - k < minSpp);
+      result.timings.decideMs += msSince(decideStart);
+    }
   }
   result.image = acc.image();
   result.pixels = acc.stats();
