@@ -68,7 +68,9 @@ TEST(Progressive, FourBlocksPooledWithThePreviousDecisionsEstimate) {
   double dof = 0.0;
   EXPECT_DOUBLE_EQ(blockVariance(img.at(0, 0), &dof), 1.0 / 12.0);
   EXPECT_EQ(dof, 3.0);
-  EXPECT_EQ(img.at(0, 0).previousDof, 2.0);
+  // add() keeps the estimate it made, which the next pass pools as the previous decision's.
+  EXPECT_EQ(img.at(0, 0).variance, static_cast<float>(1.0 / 12.0));
+  EXPECT_EQ(img.at(0, 0).varianceDof, 3.0f);
   EXPECT_FLOAT_EQ(img.error(0, 0), std::sqrt(0.075));
   // The blocks move on by a pass: before the pass before the last, 4 samples of mean 0.5.
   pass(img, 0, {0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5, 0.5});

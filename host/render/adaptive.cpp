@@ -61,18 +61,15 @@ double blockVariance(const PixelMoments& m, double* dof) {
   return worst;
 }
 
-double standardError(const PixelMoments& m) {
-  if (m.samples < 2.0) return std::numeric_limits<double>::infinity();
-  double dof = 0.0;
-  const double v = blockVariance(m, &dof);
-  if (dof <= 0.0) return std::numeric_limits<double>::infinity();
+double standardError(const PixelMoments& m, double variance, double dof, double previousVariance, double previousDof) {
+  if (m.samples < 2.0 || dof <= 0.0) return std::numeric_limits<double>::infinity();
   // The previous estimate was of the mean of earlierSamples; as 1 / n, it scales to this count.
   // (A stratified sequence converges faster than 1 / n, so it leans towards more samples.)
   const double pooled =
-      m.previousDof > 0.0 && m.earlierSamples > 0.0
-          ? (dof * v + double(m.previousDof) * m.previousVariance * (double(m.earlierSamples) / m.samples)) /
-                (dof + m.previousDof)
-          : v;
+      previousDof > 0.0 && m.earlierSamples > 0.0
+          ? (dof * variance + previousDof * previousVariance * (double(m.earlierSamples) / m.samples)) /
+                (dof + previousDof)
+          : variance;
   return std::sqrt(pooled);
 }
 
@@ -86,10 +83,8 @@ void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& su
   const std::size_t i = index(x, y);
   PixelMoments& m = pixels_[i];
   // One call per pixel per pass: the blocks shift by one pass, and the estimate they gave so far
-  // becomes the previous decision's.
-  double dof = 0.0;
-  m.previousVariance = static_cast<float>(blockVariance(m, &dof));
-  m.previousDof = static_cast<float>(dof);
+  // (kept by the last call) becomes the previous decision's.
+  const double previousVariance = m.variance, previousDof = m.varianceDof;
   m.previousSum = m.earlierSum;
   m.previousSamples = m.earlierSamples;
   m.earlierSum = m.sum;
@@ -98,7 +93,11 @@ void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& su
   m.samples += sums.w;
   m.halfSum = glm::vec3(halfAndRays);
   m.rays += halfAndRays.w;
-  errors_[i] = static_cast<float>(standardError(m));
+  double dof = 0.0;
+  const double variance = blockVariance(m, &dof);
+  m.variance = static_cast<float>(variance);
+  m.varianceDof = static_cast<float>(dof);
+  errors_[i] = static_cast<float>(standardError(m, variance, dof, previousVariance, previousDof));
 }
 
 template <class Visit> void ProgressiveImage::forTracedNeighbours(std::uint32_t x, std::uint32_t y, Visit visit) const {

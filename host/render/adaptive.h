@@ -55,10 +55,10 @@ struct PixelMoments {
   float previousSamples = 0.0f;
   glm::vec3 halfSum{0.0f}; // the last pass's first half (firstHalf of its samples)
   float rays = 0.0f;
-  // What blockVariance gave before the last pass (the variance of the mean of earlierSamples), and
-  // its degrees of freedom (0: none).
-  float previousVariance = 0.0f;
-  float previousDof = 0.0f;
+  // What blockVariance gives for these moments, and its degrees of freedom (0: none): kept by add(),
+  // whose next call pools it as the previous decision's estimate instead of computing it again.
+  float variance = 0.0f;
+  float varianceDof = 0.0f;
 };
 static_assert(sizeof(PixelMoments) == 72);
 
@@ -70,10 +70,11 @@ static_assert(sizeof(PixelMoments) == 72);
 // blocks, and the result is 0).
 double blockVariance(const PixelMoments& m, double* dof = nullptr);
 
-// The estimated standard error of the pixel's mean: blockVariance pooled with the previous
-// decision's, scaled to this sample count (as 1 / n), weighted by their degrees of freedom.
-// Infinite below two samples or without two blocks.
-double standardError(const PixelMoments& m);
+// The estimated standard error of the pixel's mean: its blocks' estimate (blockVariance(m): `variance`
+// with `dof`) pooled with the previous decision's (`previousVariance`, of the mean of
+// m.earlierSamples, with `previousDof`), that one scaled to this sample count (as 1 / n), weighted
+// by their degrees of freedom. Infinite below two samples or without two blocks.
+double standardError(const PixelMoments& m, double variance, double dof, double previousVariance, double previousDof);
 
 // The running sums of the pixels in rows [rowBegin, rowEnd) of a width x height image (a tile's
 // rows and its margin; all rows by default): the host adds each pass's sums to them. Coordinates
