@@ -359,12 +359,16 @@ void listPass() {
   // the host gave a dispatch one sample or several and however many lanes traced them, so the float
   // rounding (and the image) does not depend on how the host split the pass.
   uint began = current == 0u ? 0u : (current == 1u ? end0 : end1); // pass 0: the host's flag says
-  bool resume = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u && (current == 0u || began < base);
+  // A pass of one sample has an empty first half: where one dispatch takes the whole list pass, the
+  // host leaves its texel out (kFlagNoHalf0), which spares two of the six stores of the passes before
+  // the first decision at min_spp 4.
+  uint flags = opaqueUniform(pc.flags);
+  bool resume = (flags & kFlagAccumulate) != 0u && (current == 0u || began < base);
   vec4 sum = vec4(0.0);
   vec4 firstHalf = vec4(0.0);
   if (resume) {
     sum = imageLoad(imageTexels, int(out0 + 2u * current));
-    firstHalf = imageLoad(imageTexels, int(out0 + 2u * current + 1u));
+    if ((flags & (kFlagNoHalf0 << current)) == 0u) firstHalf = imageLoad(imageTexels, int(out0 + 2u * current + 1u));
   }
   // One turn per pass, each with its own loop over its samples, so that the common case, one pass,
   // runs the loop it always did.
@@ -401,7 +405,7 @@ void listPass() {
     if (round0 >= count) break;
     if (writes) {
       imageStore(imageTexels, int(out0 + 2u * current), sum);
-      imageStore(imageTexels, int(out0 + 2u * current + 1u), firstHalf);
+      if ((flags & (kFlagNoHalf0 << current)) == 0u) imageStore(imageTexels, int(out0 + 2u * current + 1u), firstHalf);
     }
     sum = vec4(0.0);
     firstHalf = vec4(0.0);

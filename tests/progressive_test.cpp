@@ -578,25 +578,29 @@ TEST(RenderProgressive, LanesSharingAPixelChangeNothing) {
 }
 
 TEST(RenderProgressive, PassesRunAsOneChangeNothing) {
-  // The passes before the first decision (4, 4 and 8 samples, min_spp 16) run as one list pass that
-  // reports each on its own, in one dispatch or (as a driver that cuts loops short needs) one sample
-  // per dispatch, with lanes sharing a pixel on this glass scene (16 samples: two lanes): the same
-  // sums in the same order as three passes, so the same image bit for bit and the same samples, rays
-  // and error estimates per pixel.
-  Scene s = thresholdScene(0.003, 16, 64);
-  RenderOptions o;
-  o.pixelStats = true;
-  RenderResult together = render(s, o);
-  o.oneSamplePerDispatch = true;
-  RenderResult perSample = render(s, o);
-  o.firstPassesTogether = false;
-  RenderResult apart = render(s, o);
-  for (const RenderResult* r : {&perSample, &apart}) {
-    expectTheSameRender(together, *r);
-    EXPECT_EQ(together.progressive.passes, r->progressive.passes); // the schedule's passes
+  // The passes before the first decision (4, 4 and 8 samples at min_spp 16; 1, 1 and 2 at min_spp
+  // 4, whose one-sample passes have empty first halves that one dispatch neither writes nor reads)
+  // run as one list pass that reports each on its own, in one dispatch or (as a driver that cuts
+  // loops short needs) one sample per dispatch, with lanes sharing a pixel on this glass scene (16
+  // samples: two lanes): the same sums in the same order as three passes, so the same image bit for
+  // bit and the same samples, rays and error estimates per pixel.
+  for (int minSpp : {16, 4}) {
+    SCOPED_TRACE("min_spp " + std::to_string(minSpp));
+    Scene s = thresholdScene(0.003, minSpp, 64);
+    RenderOptions o;
+    o.pixelStats = true;
+    RenderResult together = render(s, o);
+    o.oneSamplePerDispatch = true;
+    RenderResult perSample = render(s, o);
+    o.firstPassesTogether = false;
+    RenderResult apart = render(s, o);
+    for (const RenderResult* r : {&perSample, &apart}) {
+      expectTheSameRender(together, *r);
+      EXPECT_EQ(together.progressive.passes, r->progressive.passes); // the schedule's passes
+    }
+    ASSERT_GT(together.progressive.converged, 0.2) << "the first decision closed pixels";
+    ASSERT_LT(together.progressive.converged, 1.0) << "and left some open";
   }
-  ASSERT_GT(together.progressive.converged, 0.2) << "the first decision closed pixels";
-  ASSERT_LT(together.progressive.converged, 1.0) << "and left some open";
 }
 
 TEST(RenderProgressive, NoiseThresholdReachesItsTargetWithFewerRaysThanUniform) {

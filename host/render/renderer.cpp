@@ -355,6 +355,13 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
         push.segmentEnd1 = push.segmentEnd0 + ks[1];
         push.splitBase2 = push.segmentEnd1 + firstHalf(ks[2]);
       }
+      // Where one dispatch takes the whole list pass, the kernel neither writes nor reads the texel of
+      // an empty first half (a pass of one sample; never the last pass, whose half carries the rays).
+      std::uint32_t noHalf = 0;
+      if (perDispatch >= k)
+        for (std::uint32_t p = 0; p + 1 < together; ++p)
+          if (firstHalf(ks[p]) == 0) noHalf |= gpu::kFlagNoHalf0 << p;
+      push.flags = noHalf;
       BandTimes t =
           submitBand(context_, timer_, "sampling", 0, settings.height, [&](const vk::raii::CommandBuffer& cmd) {
             cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *pipelineLayout_, 0, {*descriptorSet_}, {});
@@ -365,7 +372,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
               one.sampleBase = samples + s;
               one.sampleCount = std::min(perDispatch, k - s);
               if (s > 0) {
-                one.flags = gpu::kFlagAccumulate;
+                one.flags |= gpu::kFlagAccumulate;
                 vk::MemoryBarrier sumsBarrier(vk::AccessFlagBits::eShaderWrite,
                                               vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
                 cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
@@ -390,8 +397,10 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       parallelFor(n, ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
         for (std::size_t j = begin; j < end; ++j) {
           std::uint32_t i = traced[first + order[j]];
-          for (std::size_t p = 2 * together * j; p < 2 * together * (j + 1); p += 2)
-            acc.add(i % width, i / width, sums[p], sums[p + 1]);
+          for (std::uint32_t p = 0; p < together; ++p) {
+            const std::size_t t = 2 * (together * j + p);
+            acc.add(i % width, i / width, sums[t], noHalf & (gpu::kFlagNoHalf0 << p) ? glm::vec4(0.0f) : sums[t + 1]);
+          }
         }
       });
       result.timings.readbackMs += msSince(readStart);

@@ -223,6 +223,10 @@ VKRAY_CONST(uint, kPassRefine, 1u);       // adaptive AA: resample pixels whose 
 VKRAY_CONST(uint, kPassList, 2u);         // progressive: sampleCount samples of each listed pixel
 VKRAY_CONST(uint, kFlagCenterSample, 1u); // the single sample goes through the pixel centre
 VKRAY_CONST(uint, kFlagAccumulate, 2u);   // add to the sums already in the image
+// The list pass: the first halves of the passes whose bit (kFlagNoHalf0 << pass) is set are empty (a
+// pass of one sample) and their texels are neither read nor written; the host takes them as zero. A
+// list pass's last pass always writes its half (it carries the rays traced).
+VKRAY_CONST(uint, kFlagNoHalf0, 4u);
 
 // ---- Buffer structs ------------------------------------------------------------------------------
 struct Material {
@@ -490,7 +494,7 @@ struct PushConstants {
   uint pass;        // kPassSample / kPassRefine / kPassList
   uint sampleBase;  // index of the first sample in the per-pixel sequence
   uint sampleCount; // samples per pixel in this dispatch
-  uint flags;       // kFlagCenterSample | kFlagAccumulate
+  uint flags;       // kFlagCenterSample | kFlagAccumulate | kFlagNoHalf0 << pass
   uint imageRow0;   // image row held by Image[0]
   uint prevRow0;    // image row held by PrevImage[0]
   uint prevRows;    // rows held by PrevImage[]
