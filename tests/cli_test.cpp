@@ -539,5 +539,25 @@ TEST_F(Cli, AdaptiveBenchSplitsTheRatioIntoItsFactors) {
   }
   EXPECT_EQ(rows, 1) << r.out;
 }
+
+// bench adaptive --scene-size renders each scene at its own image size, not at --height rows; the
+// two do not go together.
+TEST_F(Cli, AdaptiveBenchAtTheScenesOwnSize) {
+  const auto scene = std::filesystem::path(::testing::TempDir()) / "adaptive-size.json";
+  {
+    std::ofstream f(scene);
+    f << R"({ "base": ")" << VKRAY_SOURCE_DIR << R"(/scenes/showcase.json", "image": { "width": 40, "height": 30 } })";
+  }
+  const std::string common = " --runs 1 --thresholds 0.016 --max-uniform-spp 8 --reference-spp 32";
+  RunResult own = vkray("bench adaptive '" + scene.string() + "' --scene-size" + common);
+  ASSERT_EQ(own.exitCode, 0) << own.err;
+  EXPECT_NE(own.out.find("adaptive-size.json, 40x30,"), std::string::npos) << own.out;
+  RunResult scaled = vkray("bench adaptive '" + scene.string() + "' --height 24" + common);
+  ASSERT_EQ(scaled.exitCode, 0) << scaled.err;
+  EXPECT_NE(scaled.out.find("adaptive-size.json, 32x24,"), std::string::npos) << scaled.out;
+  RunResult both = vkray("bench adaptive '" + scene.string() + "' --scene-size --height 24" + common);
+  EXPECT_NE(both.exitCode, 0);
+  EXPECT_NE(both.err.find("--height excludes --scene-size"), std::string::npos) << both.err;
+}
 } // namespace
 } // namespace vkray::test

@@ -72,6 +72,7 @@ struct BenchAdaptiveArgs {
   DeviceFlags device;
   int runs = 5;
   std::uint32_t height = 180;
+  bool sceneSize = false; // each scene at its own image size instead of `height` rows
   int referenceSpp = 1024;
   std::vector<double> thresholds{0.016, 0.008, 0.004, 0.002};
   int minSpp = 4, maxSpp = 1024;              // the thresholds' min_spp and max_spp

@@ -61,7 +61,7 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
   }
   for (const auto& path : scenes) {
     Scene scene = loadScene(path);
-    scaleToHeight(scene.render, args.height);
+    if (!args.sceneSize) scaleToHeight(scene.render, args.height);
     scene.render.antialiasing = Antialiasing::Stratified;
     Renderer renderer(context, nullptr);
     renderer.setScene(scene);

@@ -170,8 +170,13 @@ int main(int argc, char** argv) {
                                "scene files (default: showcase, glass, seed, textured)");
   benchAdaptiveCmd->add_option("--runs", benchAdaptive.runs, "timed runs per point, interleaved")
       ->check(CLI::Range(1, 1000));
-  benchAdaptiveCmd->add_option("--height", benchAdaptive.height, "image height (aspect kept)")
-      ->check(CLI::Range(8, 4096));
+  auto* adaptiveHeight = benchAdaptiveCmd->add_option("--height", benchAdaptive.height, "image height (aspect kept)")
+                             ->check(CLI::Range(8, 4096));
+  benchAdaptiveCmd
+      ->add_flag("--scene-size", benchAdaptive.sceneSize,
+                 "each scene at its own image size (the bundled ones: 800x600, seed 640x480), where less of "
+                 "the picture is edges than at --height's default 180 rows; minutes per scene")
+      ->excludes(adaptiveHeight);
   benchAdaptiveCmd->add_option("--reference-spp", benchAdaptive.referenceSpp, "samples per pixel of the reference")
       ->check(CLI::Range(1, 4096));
   benchAdaptiveCmd->add_option("--thresholds", benchAdaptive.thresholds, "noise thresholds, comma-separated")
