@@ -19,7 +19,8 @@ layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_siz
 
 #include "lib/shade.glsl"
 
-layout(binding = kBindingImage, rgba32f) uniform writeonly restrict imageBuffer aovTexels; // two per pixel
+// Two per pixel, written as a storage buffer (gpu_types.h, kBindingImageOut: cheaper than imageStore).
+layout(std430, binding = kBindingImageOut) writeonly restrict buffer AovOut { vec4 aovOut[]; };
 layout(std430, binding = kBindingStats) readonly buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 
@@ -49,6 +50,6 @@ void main() {
     albedoHit = vec4(baseColor(loadMaterial(s.material), s), 1.0);
   }
   int texel = 2 * int((pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x);
-  imageStore(aovTexels, texel, depthNormal);
-  imageStore(aovTexels, texel + 1, albedoHit);
+  aovOut[texel] = depthNormal;
+  aovOut[texel + 1] = albedoHit;
 }

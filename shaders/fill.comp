@@ -16,7 +16,9 @@ layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_siz
 #include "lib/common.glsl"
 
 layout(std140, binding = kBindingFrame) uniform FrameBlock { FrameParams frame; };
-layout(binding = kBindingImage, rgba32f) uniform restrict imageBuffer imageTexels;
+// Read as texels, written as a storage buffer: as trace.comp (gpu_types.h, kBindingImageOut).
+layout(binding = kBindingImage, rgba32f) uniform readonly imageBuffer imageTexels;
+layout(std430, binding = kBindingImageOut) writeonly buffer ImageOut { vec4 imageOut[]; };
 layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 layout(constant_id = kSpecCountStats) const bool COUNT_STATS = true;
@@ -39,7 +41,7 @@ void main() {
     int slot = int((pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x);
     vec4 result = vec4(sum, float(pc.sampleCount));
     if (accumulate) result += imageLoad(imageTexels, slot);
-    imageStore(imageTexels, slot, result);
+    imageOut[slot] = result;
   }
   if (COUNT_STATS) {
     uint total = subgroupAdd(eyeRays);

@@ -16,7 +16,8 @@ layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_siz
 #include "lib/offset.glsl"
 #include "lib/scene.glsl"
 
-layout(binding = kBindingImage, rgba32f) uniform writeonly restrict imageBuffer hitTexels; // one per pixel
+// One per pixel, written as a storage buffer (gpu_types.h, kBindingImageOut: cheaper than imageStore).
+layout(std430, binding = kBindingImageOut) writeonly restrict buffer HitOut { vec4 hitOut[]; };
 layout(std430, binding = kBindingStats) readonly buffer StatsBuffer { RayStats stats; };
 layout(push_constant) uniform Push { PushConstants pc; };
 
@@ -50,5 +51,5 @@ void main() {
       }
     }
   }
-  imageStore(hitTexels, int((pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x), result);
+  hitOut[(pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x] = result;
 }

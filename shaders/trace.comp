@@ -16,9 +16,13 @@ layout(local_size_x = kWorkgroupSizeX, local_size_y = kWorkgroupSizeY, local_siz
 #include "lib/shade.glsl"
 
 // The sums (rgb, samples) per pixel, and the refine pass's copy of the base image: storage texel
-// buffers, which llvmpipe reads and writes one 16-byte texel per lane, where a storage buffer's vec4
-// is four per-lane loops of scalar accesses (10-15 % of an accumulated sample's time).
-layout(binding = kBindingImage, rgba32f) uniform restrict imageBuffer imageTexels;
+// buffers, which llvmpipe reads one 16-byte texel per lane, where a storage buffer's vec4 is four
+// per-lane loops of scalar loads (10-15 % of an accumulated sample's time). The sums are written
+// through the same memory as a storage buffer (imageOut), whose stores llvmpipe compiles inline at
+// half the cost of imageStore's helper function (gpu_types.h, kBindingImageOut); so neither
+// declaration is `restrict`.
+layout(binding = kBindingImage, rgba32f) uniform readonly imageBuffer imageTexels;
+layout(std430, binding = kBindingImageOut) writeonly buffer ImageOut { vec4 imageOut[]; };
 layout(binding = kBindingPrevImage, rgba32f) uniform readonly restrict imageBuffer prevTexels;
 layout(std430, binding = kBindingStats) buffer StatsBuffer { RayStats stats; };
 // Rays per pixel, summed over its samples (PIXEL_RAYS: the viewer's cost map).
@@ -404,8 +408,8 @@ void listPass() {
     round0 = passEnd; // a pass's samples need not fill its last round
     if (round0 >= count) break;
     if (writes) {
-      imageStore(imageTexels, int(out0 + 2u * current), sum);
-      if ((flags & (kFlagNoHalf0 << current)) == 0u) imageStore(imageTexels, int(out0 + 2u * current + 1u), firstHalf);
+      imageOut[out0 + 2u * current] = sum;
+      if ((flags & (kFlagNoHalf0 << current)) == 0u) imageOut[out0 + 2u * current + 1u] = firstHalf;
     }
     sum = vec4(0.0);
     firstHalf = vec4(0.0);
@@ -419,8 +423,8 @@ void listPass() {
   }
   if (writes) {
     firstHalf.w += float(rays); // all of the dispatch's, with its last pass's sums (the host adds them up)
-    imageStore(imageTexels, int(out0 + 2u * current), sum);
-    imageStore(imageTexels, int(out0 + 2u * current + 1u), firstHalf);
+    imageOut[out0 + 2u * current] = sum;
+    imageOut[out0 + 2u * current + 1u] = firstHalf;
   }
 }
 
@@ -456,9 +460,9 @@ void main() {
         vec4 result = vec4(sampleSum(pixel, index, pc.sampleBase, opaqueUniform(pc.sampleCount), false),
                            float(pc.sampleCount));
         if (accumulate) result += imageLoad(imageTexels, int(slot));
-        imageStore(imageTexels, int(slot), result);
+        imageOut[slot] = result;
       } else if (!accumulate) {
-        imageStore(imageTexels, int(slot), prevPixel(pixel));
+        imageOut[slot] = prevPixel(pixel);
       }
     } else {
       bool center = (opaqueUniform(pc.flags) & kFlagCenterSample) != 0u;
@@ -466,7 +470,7 @@ void main() {
                          float(pc.sampleCount));
       bool accumulate = (opaqueUniform(pc.flags) & kFlagAccumulate) != 0u;
       if (accumulate) result += imageLoad(imageTexels, int(slot));
-      imageStore(imageTexels, int(slot), result);
+      imageOut[slot] = result;
       if (PIXEL_RAYS) {
         uint rays = gCount.eyeRays + gCount.shadowRays + gCount.reflectionRays + gCount.refractionRays;
         pixelRays[slot] = accumulate ? pixelRays[slot] + rays : rays;

@@ -717,8 +717,8 @@ void Renderer::ensureImageWindow(std::uint32_t width, std::uint32_t rows, std::u
   if (rebuild) {
     vk::DeviceSize bytes = static_cast<vk::DeviceSize>(width) * rows * pixelTexels * sizeof(glm::vec4);
     image_.reset(); // the old window's memory goes back first
-    image_ =
-        std::make_unique<vulkan::Buffer>(context_, bytes, kImageTexelFormat, vulkan::MemoryUse::DeviceLocal, "image");
+    image_ = std::make_unique<vulkan::Buffer>(context_, bytes, kImageTexelFormat, vulkan::MemoryUse::DeviceLocal,
+                                              "image", vk::BufferUsageFlagBits::eStorageBuffer); // kBindingImageOut
     imageWidth_ = width;
     imageRows_ = rows;
     imagePixelTexels_ = pixelTexels;
@@ -770,6 +770,7 @@ void Renderer::updateDescriptors() {
                         : b == gpu::kBindingPixelRays   ? pixelRays_->handle()
                         : b == gpu::kBindingRayTree     ? rayTree_->handle()
                         : b == gpu::kBindingPhotonImage ? photonImage_->handle()
+                        : b == gpu::kBindingImageOut    ? image_->handle()
                                                         : sceneBuffers_.at(b).handle();
     infos[b] = vk::DescriptorBufferInfo(handle, 0, VK_WHOLE_SIZE);
     writes.emplace_back(*descriptorSet_, b, 0, 1, descriptorType(b), nullptr, &infos[b]);
@@ -870,6 +871,16 @@ std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const
       }
     }
     for (const RowRun& run : runs) {
+      if (&run != &runs.front()) {
+        // The runs' rows are disjoint, but each kernel writes the image through one descriptor
+        // (kBindingImageOut) and reads it through another (kBindingImage), which the validation
+        // layer's synchronization checks see as one range: a barrier orders them (on lavapipe
+        // dispatches run one after another anyway).
+        vk::MemoryBarrier ordered(vk::AccessFlagBits::eShaderWrite,
+                                  vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {},
+                            ordered, {}, {});
+      }
       one.tileOrigin = glm::uvec2(push.tileOrigin.x, run.row0);
       one.tileSize = glm::uvec2(push.tileSize.x, run.rows);
       one.param = spreadStride((run.rows + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY);

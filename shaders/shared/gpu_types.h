@@ -62,7 +62,12 @@ VKRAY_CONST(uint, kBindingRayTree, 21u);
 // struck, lo/hi; rays traced, lo/hi; non-finite contributions), then per pixel and channel a 64-bit
 // fixed-point sum (lo, hi) of the contributions times 2^kPhotonFixedBits.
 VKRAY_CONST(uint, kBindingPhotonImage, 22u);
-VKRAY_CONST(uint, kBindingCount, 23u);
+// vec4[]: the image window's buffer again (kBindingImage), as a storage buffer for the kernels'
+// writes. On lavapipe a storage texel buffer's imageStore is a helper function of ~60 instructions a
+// lane (a per-lane, per-component scatter with format conversion), a storage buffer's vec4 store
+// ~30, inline; imageLoad, inline either way, stays the faster read.
+VKRAY_CONST(uint, kBindingImageOut, 23u);
+VKRAY_CONST(uint, kBindingCount, 24u);
 VKRAY_CONST(uint, kPhotonHeaderWords, 8u);
 VKRAY_CONST(uint, kPhotonFixedBits, 24u);
 
