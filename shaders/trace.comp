@@ -334,6 +334,10 @@ void flushStats() {
 // pixels, and lanes of eight different pixels walk different nodes, materials and textures, where a
 // pixel's own samples, a fraction of a pixel apart, take nearly the same path. Work is assigned by
 // subgroup, so a pixel's lanes are one subgroup's whatever the driver's mapping of invocations.
+// Whether the list pass writes (and reads) pass `pass`'s first-half texel: not where the host's
+// kFlagNoHalf0 bit says the half is empty.
+bool hasHalfTexel(uint flags, uint pass) { return (flags & (kFlagNoHalf0 << pass)) == 0u; }
+
 void listPass() {
   uint lanes = min(max(opaqueUniform(pc.param), 1u), gl_SubgroupSize);
   uint item = gl_WorkGroupID.x * (kWorkgroupSizeX * kWorkgroupSizeY) + gl_SubgroupID * gl_SubgroupSize +
@@ -372,7 +376,7 @@ void listPass() {
   vec4 firstHalf = vec4(0.0);
   if (resume) {
     sum = imageLoad(imageTexels, int(out0 + 2u * current));
-    if ((flags & (kFlagNoHalf0 << current)) == 0u) firstHalf = imageLoad(imageTexels, int(out0 + 2u * current + 1u));
+    if (hasHalfTexel(flags, current)) firstHalf = imageLoad(imageTexels, int(out0 + 2u * current + 1u));
   }
   // One turn per pass, each with its own loop over its samples, so that the common case, one pass,
   // runs the loop it always did.
@@ -409,7 +413,7 @@ void listPass() {
     if (round0 >= count) break;
     if (writes) {
       imageOut[out0 + 2u * current] = sum;
-      if ((flags & (kFlagNoHalf0 << current)) == 0u) imageOut[out0 + 2u * current + 1u] = firstHalf;
+      if (hasHalfTexel(flags, current)) imageOut[out0 + 2u * current + 1u] = firstHalf;
     }
     sum = vec4(0.0);
     firstHalf = vec4(0.0);

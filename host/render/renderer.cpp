@@ -82,6 +82,16 @@ void spreadGroups(std::size_t n, std::size_t group, std::vector<std::uint32_t>& 
   for (std::size_t j = whole * group; j < n; ++j) order.push_back(static_cast<std::uint32_t>(j));
 }
 
+// Orders the shader writes of the dispatches recorded so far before the shader reads and writes of
+// the next ones in the same command buffer: passes that add to the sums the one before wrote, and
+// row runs that write the image through one descriptor and read it through another.
+void orderShaderWrites(const vk::raii::CommandBuffer& cmd) {
+  vk::MemoryBarrier written(vk::AccessFlagBits::eShaderWrite,
+                            vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
+  cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {}, written,
+                      {}, {});
+}
+
 // The sample pass's tile-row stride for a dispatch `rows` workgroups high (trace.comp, main): coprime
 // to `rows`, so that row r -> r * stride mod rows is a permutation, and near rows / golden ratio, so
 // that any contiguous block of workgroup rows (one llvmpipe thread's share) maps to rows spread over
@@ -373,10 +383,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
               one.sampleCount = std::min(perDispatch, k - s);
               if (s > 0) {
                 one.flags |= gpu::kFlagAccumulate;
-                vk::MemoryBarrier sumsBarrier(vk::AccessFlagBits::eShaderWrite,
-                                              vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
-                                    vk::PipelineStageFlagBits::eComputeShader, {}, sumsBarrier, {}, {});
+                orderShaderWrites(cmd);
               }
               cmd.pushConstants<gpu::PushConstants>(*pipelineLayout_, vk::ShaderStageFlagBits::eCompute, 0, one);
               cmd.dispatch(static_cast<std::uint32_t>((n * lanes + group - 1) / group), 1, 1);
@@ -864,23 +871,15 @@ std::uint32_t Renderer::recordDispatch(const vk::raii::CommandBuffer& cmd, const
       one.sampleCount = 1;
       if (k > 0) {
         one.flags |= gpu::kFlagAccumulate;
-        vk::MemoryBarrier sums(vk::AccessFlagBits::eShaderWrite,
-                               vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
-        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {},
-                            sums, {}, {});
+        orderShaderWrites(cmd);
       }
     }
     for (const RowRun& run : runs) {
-      if (&run != &runs.front()) {
-        // The runs' rows are disjoint, but each kernel writes the image through one descriptor
-        // (kBindingImageOut) and reads it through another (kBindingImage), which the validation
-        // layer's synchronization checks see as one range: a barrier orders them (on lavapipe
-        // dispatches run one after another anyway).
-        vk::MemoryBarrier ordered(vk::AccessFlagBits::eShaderWrite,
-                                  vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite);
-        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eComputeShader, {},
-                            ordered, {}, {});
-      }
+      // The runs' rows are disjoint, but each kernel writes the image through one descriptor
+      // (kBindingImageOut) and reads it through another (kBindingImage), which the validation
+      // layer's synchronization checks see as one range (on lavapipe dispatches run one after
+      // another anyway).
+      if (&run != &runs.front()) orderShaderWrites(cmd);
       one.tileOrigin = glm::uvec2(push.tileOrigin.x, run.row0);
       one.tileSize = glm::uvec2(push.tileSize.x, run.rows);
       one.param = spreadStride((run.rows + gpu::kWorkgroupSizeY - 1) / gpu::kWorkgroupSizeY);
