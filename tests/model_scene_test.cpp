@@ -218,6 +218,23 @@ TEST(HardeningAssimp, AnyUnsupportedRequiredExtensionIsRefusedByName) {
       << what;
 }
 
+// glTF 1.0 shares the extension but not the schema: it is refused by its version, not by the first
+// member whose type changed in 2.0 (its `scene` is a string), and so is its binary form.
+TEST(HardeningAssimp, GltfOneIsRefusedByItsVersion) {
+  REQUIRE_ASSIMP_MODELS();
+  for (const char* name : {"glTF/TwoBoxes/TwoBoxes.gltf", "glTF/CesiumMilkTruck/CesiumMilkTruck.gltf"}) {
+    fs::path f = kAssimp / name;
+    std::string what = refusal(f);
+    EXPECT_NE(what.find(f.string() + ": asset.version: is '1"), std::string::npos) << what;
+    EXPECT_NE(what.find("a glTF 1.0 file; vkray reads glTF 2.0"), std::string::npos) << what;
+  }
+  fs::path glb = kAssimp / "glTF/BoxTextured-glTF-Binary/BoxTextured.glb";
+  std::string what = refusal(glb);
+  EXPECT_NE(what.find(glb.string() + ": is binary glTF 1.0 (its header says version 1); vkray reads glTF 2.0"),
+            std::string::npos)
+      << what;
+}
+
 // A Draco primitive in a file that only lists Draco as used (not required) is refused at the primitive.
 TEST(HardeningGltf, DracoPrimitiveIsRefusedAtItsPath) {
   fs::path dir = test::scratchDir("model-test");

@@ -194,6 +194,7 @@ public:
 
   void check() {
     if (!doc_.is_object()) fail("(top level)", "must be an object");
+    checkVersion();
     for (const char* list : {"extensionsRequired", "extensionsUsed"}) {
       if (const auto* v = member(doc_, list, JsonKind::Array, list)) {
         for (std::size_t i = 0; i < v->size(); ++i) {
@@ -278,6 +279,26 @@ private:
   [[noreturn]] void fail(const std::string& path, const std::string& problem) const {
     throw InputError(where_, path + ": " + problem);
   }
+  // glTF 1.0 (2015) has the same extension and a different schema (objects keyed by name, `scene`
+  // a string): name the version instead of its first type mismatch. A 2.0 reader must refuse a
+  // major version it does not know (glTF 2.0 sec. 3.2); a missing version is left to the rest.
+  void checkVersion() const {
+    const auto asset = doc_.find("asset");
+    if (asset == doc_.end() || !asset->is_object()) return;
+    const auto version = asset->find("version");
+    if (version == asset->end()) return;
+    std::string text;
+    if (version->is_string())
+      text = version->get<std::string>();
+    else if (version->is_number())
+      text = version->dump();
+    else
+      fail("asset.version", "must be a string, got " + typeOf(*version));
+    if (text.rfind("2.", 0) == 0 || text == "2") return;
+    const std::string major = text.substr(0, text.find('.'));
+    fail("asset.version", "is '" + text + "': a glTF " + (major == "1" ? std::string("1.0") : major) +
+                              " file; vkray reads glTF 2.0 (re-export or convert the model to glTF 2.0)");
+  }
   void need(const nlohmann::json& v, JsonKind k, const std::string& path) const {
     if (!isKind(v, k)) fail(path, std::string("must be ") + kindName(k) + ", got " + typeOf(v));
   }
@@ -324,8 +345,8 @@ private:
 };
 
 // The file's JSON: the whole of a .gltf, the first chunk of a .glb (glTF 2.0 sec. 4.4). Empty when
-// a .glb is too broken to find it (tinygltf then says why).
-std::string gltfJson(const std::filesystem::path& file, bool binary) {
+// a .glb is too broken to find it (tinygltf then says why); a binary glTF 1.0 is refused here.
+std::string gltfJson(const std::filesystem::path& file, bool binary, const std::string& shownAs) {
   std::ifstream in(file, std::ios::binary);
   if (!binary) return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   unsigned char header[20];
@@ -335,7 +356,13 @@ std::string gltfJson(const std::filesystem::path& file, bool binary) {
     std::memcpy(&v, header + at, sizeof v);
     return v;
   };
-  if (std::memcmp(header, "glTF", 4) != 0 || std::memcmp(header + 16, "JSON", 4) != 0) return {};
+  if (std::memcmp(header, "glTF", 4) != 0) return {};
+  // Binary glTF 1.0 (KHR_binary_glTF) has version 1 here and no chunk types.
+  if (u32(4) != 2)
+    throw InputError(shownAs, "is binary glTF " + std::string(u32(4) == 1 ? "1.0" : std::to_string(u32(4))) +
+                                  " (its header says version " + std::to_string(u32(4)) +
+                                  "); vkray reads glTF 2.0 (re-export or convert the model to glTF 2.0)");
+  if (std::memcmp(header + 16, "JSON", 4) != 0) return {};
   std::uint32_t length = u32(12);
   if (length > u32(8)) return {};
   std::string json(length, '\0');
@@ -876,7 +903,7 @@ MeshData readGltf(const MeshRequest& request) {
   std::string ext = request.file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
                  [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  std::string json = gltfJson(request.file, ext == ".glb");
+  std::string json = gltfJson(request.file, ext == ".glb", request.shownAs);
   if (!json.empty()) {
     nlohmann::json doc;
     try {
