@@ -235,6 +235,34 @@ TEST(HardeningAssimp, GltfOneIsRefusedByItsVersion) {
       << what;
 }
 
+// A model in a format vkray does not read, given where a scene or model goes, is named as such, not
+// as a JSON syntax error at its first byte; a scene file without the .json extension still loads.
+TEST(HardeningAssimp, ForeignModelFormatIsNamedNotParsedAsJson) {
+  REQUIRE_ASSIMP_MODELS();
+  for (const char* name : {"STL/Spider_ascii.stl", "FBX/box.fbx"}) {
+    fs::path f = kAssimp / name;
+    EXPECT_EQ(refusal(f), f.string() + ": neither a JSON scene (it does not begin with '{') nor a model vkray reads "
+                                       "(.obj, .gltf, .glb, .ply); convert other model formats, e.g. with assimp "
+                                       "export (Debian's assimp-utils)");
+  }
+}
+
+TEST(HardeningSceneFile, SceneWithoutTheJsonExtensionLoads) {
+  fs::path dir = test::scratchDir("model-test");
+  fs::path f = dir / "scene";
+  std::ofstream(f) << "\xEF\xBB\xBF // a comment first\n/* and another */ { \"camera\": { \"position\": [0, 0, 5], "
+                      "\"look_at\": [0, 0, 0] }, \"objects\": [] }";
+  std::string what = refusal(f);
+  fs::path broken = dir / "scene.txt";
+  std::ofstream(broken) << "{ \"camera\": ";
+  std::string brokenWhat = refusal(broken);
+  fs::remove_all(dir);
+  EXPECT_EQ(what, "accepted");
+  // A file that opens an object is a scene with a mistake in it: the parser says where.
+  EXPECT_NE(brokenWhat.find("scene.txt:1:"), std::string::npos) << brokenWhat;
+  EXPECT_NE(brokenWhat.find("invalid JSON"), std::string::npos) << brokenWhat;
+}
+
 // A Draco primitive in a file that only lists Draco as used (not required) is refused at the primitive.
 TEST(HardeningGltf, DracoPrimitiveIsRefusedAtItsPath) {
   fs::path dir = test::scratchDir("model-test");

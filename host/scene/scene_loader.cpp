@@ -2,6 +2,7 @@
 #include "scene/scene_loader.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <fstream>
 #include <map>
@@ -564,6 +565,25 @@ std::string readSceneFile(const std::filesystem::path& path, const std::string& 
   return text;
 }
 
+// Whether a file's text opens a JSON object: its first character after white space, a UTF-8
+// byte-order mark and comments (which the parser skips) is '{'.
+bool opensAnObject(const std::string& text) {
+  std::size_t i = text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+  while (i < text.size()) {
+    if (std::isspace(static_cast<unsigned char>(text[i]))) {
+      ++i;
+    } else if (text.compare(i, 2, "//") == 0) {
+      i = text.find('\n', i);
+    } else if (text.compare(i, 2, "/*") == 0) {
+      i = text.find("*/", i + 2);
+      if (i != std::string::npos) i += 2;
+    } else {
+      return text[i] == '{';
+    }
+  }
+  return false;
+}
+
 // "base": "other.json" makes a scene a patch of another (RFC 7386 JSON merge patch): objects merge
 // key by key, anything else (arrays included) replaces. Chains are followed up to a depth of 8.
 nlohmann::json resolveBase(nlohmann::json doc, const std::string& name, const std::filesystem::path& baseDir,
@@ -600,7 +620,18 @@ Scene loadSceneFromString(const std::string& text, const std::string& name, cons
 
 Scene loadScene(const std::filesystem::path& path, const ModelSceneOptions& model) {
   if (isModelFile(path)) return loadModelScene(path, model);
-  Scene scene = loadSceneFromString(readSceneFile(path, path.string()), path.string(), path.parent_path());
+  std::string text = readSceneFile(path, path.string());
+  // A file that is not JSON and not named .json is most likely a model in a format vkray does not
+  // read (STL, FBX, 3DS, ...): say so, instead of the JSON parser's complaint about its first byte.
+  std::string ext = path.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext != ".json" && !opensAnObject(text)) {
+    throw InputError(path.string(), "neither a JSON scene (it does not begin with '{') nor a model vkray reads "
+                                    "(.obj, .gltf, .glb, .ply); convert other model formats, e.g. with assimp "
+                                    "export (Debian's assimp-utils)");
+  }
+  Scene scene = loadSceneFromString(text, path.string(), path.parent_path());
   scene.path = path;
   return scene;
 }
