@@ -278,7 +278,8 @@ const MalformedScene kMalformedScenes[] = {
     {"time-limit-negative.json", "time-limit-negative.json: render.time_limit: must be in [0, 604800], got -1"},
     {"empty.json", "empty.json:1:1: invalid JSON: syntax error while parsing value - unexpected end of input"},
     {"null.json", "null.json: (top level): must be an object, got null"},
-    {"garbage.bin", "garbage.bin:1:1: invalid JSON: syntax error while parsing value - invalid literal"},
+    // Not named .json and not opening an object: no JSON error at its first byte, but what it is not.
+    {"garbage.bin", "garbage.bin: neither a JSON scene (it does not begin with '{') nor a model vkray reads"},
     {"invalid-utf8.json", "invalid-utf8.json:1:82: invalid JSON: syntax error while parsing value - invalid string: "
                           "ill-formed UTF-8 byte; last read: '\"caf\\xe9 '"},
     {"control-chars-key.json", "control-chars-key.json: (top level): unknown key 'objects\\n\\r\\x1b[31m'"},
