@@ -97,6 +97,17 @@ TEST_F(TileMerge, RefusesOverlaps) {
   EXPECT_NE(refusal({a, b}).find("b.pfm: rows 5-9 overlap"), std::string::npos) << refusal({a, b});
 }
 
+// A tile listed twice (a shell glob and a name, say) is named as such, not as overlapping itself;
+// so is the same file under another name.
+TEST_F(TileMerge, RefusesATileGivenTwice) {
+  auto a = tile("a.pfm", 0, 5);
+  auto b = tile("b.pfm", 5, 10);
+  EXPECT_EQ(refusal({a, a, b}), a.string() + ": is given twice");
+  fs::path other = dir_ / "sub" / ".." / "a.pfm";
+  fs::create_directories(dir_ / "sub");
+  EXPECT_EQ(refusal({a, b, other}), other.string() + ": is the same file as " + a.string() + ", given before");
+}
+
 TEST_F(TileMerge, RefusesGaps) {
   auto a = tile("a.pfm", 0, 4);
   auto b = tile("b.pfm", 5, 10);

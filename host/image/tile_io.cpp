@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include <nlohmann/json.hpp>
@@ -92,9 +93,18 @@ void writeTile(const fs::path& path, const Image& whole, const TileInfo& info) {
 Image mergeTiles(const std::vector<fs::path>& paths) {
   if (paths.empty()) throw InputError("merge", "no tiles given");
   std::vector<Tile> tiles;
+  std::map<fs::path, fs::path> given; // each file once: its canonical path -> as given
   for (const fs::path& p : paths) {
     if (imageFormatFor(p) != ImageFormat::Pfm) throw InputError(p.string(), "a tile is a .pfm file");
     tiles.push_back({p, readSidecar(p)});
+    std::error_code ec;
+    fs::path canonical = fs::weakly_canonical(p, ec);
+    if (ec) canonical = fs::absolute(p).lexically_normal();
+    auto [at, added] = given.emplace(canonical, p);
+    if (!added) {
+      throw InputError(p.string(), at->second == p ? std::string("is given twice")
+                                                   : "is the same file as " + at->second.string() + ", given before");
+    }
   }
   const TileInfo& first = tiles.front().info;
   for (const Tile& t : tiles) {
