@@ -21,15 +21,14 @@
 #include "image/decode.h"
 #include "image/exr_io.h"
 #include "util/error.h"
+#include "util/file_extension.h"
 
 namespace vkray {
 
 namespace fs = std::filesystem;
 
 ImageFormat imageFormatFor(const fs::path& path) {
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = lowerExtension(path);
   if (ext == ".png") return ImageFormat::Png;
   if (ext == ".pfm") return ImageFormat::Pfm;
   if (ext == ".exr") return ImageFormat::Exr;

@@ -15,6 +15,7 @@
 #include "scene/json_reader.h"
 #include "scene/scene_limits.h"
 #include "util/error.h"
+#include "util/file_extension.h"
 
 namespace vkray {
 
@@ -28,13 +29,6 @@ bool finite(const dvec3& v) {
 
 bool inFloat32(double v) {
   return std::abs(v) <= static_cast<double>(std::numeric_limits<float>::max());
-}
-
-std::string lowerExtension(const std::filesystem::path& p) {
-  std::string ext = p.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-  return ext;
 }
 
 // Area-weighted vertex normals over vertices welded by exact position (glTF splits vertices at

@@ -17,6 +17,7 @@
 #include "scene/json_reader.h"
 #include "scene/mesh_import.h"
 #include "util/error.h"
+#include "util/file_extension.h"
 
 namespace vkray {
 
@@ -358,9 +359,9 @@ std::string gltfJson(const std::filesystem::path& file, bool binary, const std::
   };
   if (std::memcmp(header, "glTF", 4) != 0) return {};
   // Binary glTF 1.0 (KHR_binary_glTF) has version 1 here and no chunk types.
-  if (u32(4) != 2)
-    throw InputError(shownAs, "is binary glTF " + std::string(u32(4) == 1 ? "1.0" : std::to_string(u32(4))) +
-                                  " (its header says version " + std::to_string(u32(4)) +
+  if (const std::uint32_t version = u32(4); version != 2)
+    throw InputError(shownAs, "is binary glTF " + std::string(version == 1 ? "1.0" : std::to_string(version)) +
+                                  " (its header says version " + std::to_string(version) +
                                   "); vkray reads glTF 2.0 (re-export or convert the model to glTF 2.0)");
   if (std::memcmp(header + 16, "JSON", 4) != 0) return {};
   std::uint32_t length = u32(12);
@@ -900,9 +901,7 @@ MeshData readGltf(const MeshRequest& request) {
   tinygltf::Model model;
   std::string err;
   std::string warn;
-  std::string ext = request.file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = lowerExtension(request.file);
   std::string json = gltfJson(request.file, ext == ".glb", request.shownAs);
   if (!json.empty()) {
     nlohmann::json doc;

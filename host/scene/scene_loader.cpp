@@ -14,6 +14,7 @@
 #include "scene/model_scene.h"
 #include "scene/scene_limits.h"
 #include "util/error.h"
+#include "util/file_extension.h"
 
 namespace vkray {
 
@@ -385,9 +386,7 @@ void readMesh(const JsonNode& obj, LoadContext& ctx) {
   if (auto t = obj.find("transform")) request.worldFromMesh = readTransform(*t);
   if (obj.find("material")) request.material = readObjectMaterial(obj, ctx);
   if (auto n = obj.find("normals")) request.normals = n->enumValue<MeshNormals>();
-  std::string ext = request.file.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = lowerExtension(request.file);
   bool gltf = ext == ".gltf" || ext == ".glb";
   if (auto c = obj.find("import_camera")) {
     request.importCamera = c->boolean();
@@ -623,9 +622,7 @@ Scene loadScene(const std::filesystem::path& path, const ModelSceneOptions& mode
   std::string text = readSceneFile(path, path.string());
   // A file that is not JSON and not named .json is most likely a model in a format vkray does not
   // read (STL, FBX, 3DS, ...): say so, instead of the JSON parser's complaint about its first byte.
-  std::string ext = path.extension().string();
-  std::transform(ext.begin(), ext.end(), ext.begin(),
-                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  const std::string ext = lowerExtension(path);
   if (ext != ".json" && !opensAnObject(text)) {
     throw InputError(path.string(), "neither a JSON scene (it does not begin with '{') nor a model vkray reads "
                                     "(.obj, .gltf, .glb, .ply); convert other model formats, e.g. with assimp "
