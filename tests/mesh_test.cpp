@@ -8,7 +8,9 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -550,6 +552,41 @@ TEST(CliMesh, StatsReportTheBvhAndTheMeshes) {
   const double expected = (value("bvh bytes: ") + triangles * 48 + 2 * 3 * 16) / triangles;
   EXPECT_NEAR(value("bytes per triangle: "), expected, 0.05) << out;
   fs::remove_all(dir);
+}
+
+// `bench meshes --rounds N` measures every size N times, round r of every size before round r + 1
+// of any, prints each ratio's median and range over the rounds, and keeps one row per size (its
+// median round) in the table and the CSV, which tools/plot-mesh-bench reads.
+TEST(CliMesh, BenchRoundsAreInterleavedAndSummarised) {
+  fs::path dir = test::freshScratchDir("cli-mesh-rounds");
+  const std::string csv = (dir / "rounds.csv").string();
+  test::CliRun run = test::runVkray(
+      "bench meshes --sizes 200,2000 --width 32 --height 24 --runs 1 --rounds 3 --no-embree --csv " + csv, dir);
+  ASSERT_EQ(run.exitCode, 0) << run.err;
+  // Each round's lines, "round R of 3, T triangles: ...", in the order printed.
+  std::vector<std::pair<int, long>> order;
+  std::istringstream lines(run.out);
+  for (std::string line; std::getline(lines, line);) {
+    int round = 0;
+    long triangles = 0;
+    if (std::sscanf(line.c_str(), "round %d of 3, %ld triangles:", &round, &triangles) == 2)
+      order.emplace_back(round, triangles);
+  }
+  ASSERT_EQ(order.size(), 6u) << run.out;
+  for (std::size_t i = 0; i < order.size(); ++i) {
+    EXPECT_EQ(order[i].first, static_cast<int>(i / 2) + 1) << run.out; // round 1 twice, then 2, then 3
+    EXPECT_EQ(order[i].second, order[i % 2].second) << run.out;        // the small mesh, then the large
+  }
+  EXPECT_LT(order[0].second, order[1].second) << run.out;
+  EXPECT_NE(run.out.find("over 3 rounds, median [least-largest], Mrays/s:"), std::string::npos) << run.out;
+  EXPECT_NE(run.out.find("each size's median round"), std::string::npos) << run.out;
+  std::istringstream in(test::slurp(csv));
+  std::string line;
+  int rows = 0;
+  std::getline(in, line);
+  EXPECT_EQ(line.rfind("triangles,build_ms,", 0), 0u) << line;
+  while (std::getline(in, line)) ++rows;
+  EXPECT_EQ(rows, 2); // one per size, not one per round
 }
 
 } // namespace

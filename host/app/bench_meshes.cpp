@@ -10,6 +10,8 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <functional>
+#include <string>
 #include <thread>
 
 #include <sys/resource.h>
@@ -300,6 +302,90 @@ void runEmbree(const GpuScene& g, const Scene& scene, const BenchMeshesArgs& arg
 
 #endif
 
+// One round of one mesh: the renderer's kernel and the ray queries on vkray's side, then (when
+// `embree`) the same rays through Embree. `eye` holds the mesh under a light that casts no shadows,
+// `shadow` the same mesh under one that does; the query kernel's runs alternate between the two,
+// and the shadow rays' time is the median of each pair's difference, so that a slow spell of the
+// machine falls on both sides of a difference instead of on one.
+Row measureMesh(Renderer& eye, Renderer& shadow, const MeshData& mesh, const BenchMeshesArgs& args,
+                const RenderOptions& options, bool embree) {
+  (void)embree; // read only where Embree is built in
+  Row row;
+  Scene eyeScene = benchScene(mesh, args, false);
+  Scene shadowScene = benchScene(mesh, args, true);
+  row.triangles = eyeScene.triangles.size();
+  eye.setScene(eyeScene);
+  shadow.setScene(shadowScene);
+  const GpuScene& g = shadow.gpuScene();
+  row.buildMs = std::min(eye.gpuScene().bvh.stats.buildMs, g.bvh.stats.buildMs);
+  row.nodes = g.bvh.stats.nodes;
+  row.depth = g.bvh.stats.depth;
+  row.bytesPerTriangle = static_cast<double>(g.meshBytes()) / static_cast<double>(row.triangles);
+
+  // The renderer's own kernel on the eye rays: one counted render (builds the pipeline), one
+  // warm-up, then the timed runs.
+  TimedRender t = timeRender(eye, eyeScene, eyeScene.render, options, 1, 1);
+  auto [renderMs, renderCpuMs] = timeRenders(eye, eyeScene, options, args.runs);
+  row.renderMs = renderMs;
+  row.renderCpuMs = renderCpuMs;
+  row.eyeRays = t.stats.eye;
+
+  // The ray queries alone: one render of each builds its pipeline (and the shadow entry points'
+  // table) and gives the hits, then the timed runs in pairs.
+  RenderOptions query = options;
+  query.kernel = Kernel::Hits;
+  eye.render(eyeScene.camera, eyeScene.render, query);
+  RenderResult hits = shadow.render(shadowScene.camera, shadowScene.render, query);
+  row.shadowTableMs = g.shadowEntryMs;
+  std::vector<double> eyeMs, pairMs;
+  double eyeCpu = 0.0, shadowCpu = 0.0;
+  for (int i = 0; i < args.runs; ++i) {
+    double cpu0 = processCpuMs();
+    double a = eye.render(eyeScene.camera, eyeScene.render, query).timings.traceMs;
+    double cpu1 = processCpuMs();
+    double b = shadow.render(shadowScene.camera, shadowScene.render, query).timings.traceMs;
+    double cpu2 = processCpuMs();
+    eyeMs.push_back(a);
+    pairMs.push_back(b - a);
+    eyeCpu += cpu1 - cpu0;
+    shadowCpu += (cpu2 - cpu1) - (cpu1 - cpu0);
+  }
+  row.primaryMs = median(eyeMs);
+  row.primaryCpuMs = eyeCpu / args.runs;
+  row.shadowMs = std::max(1e-3, median(pairMs));
+  row.shadowCpuMs = std::max(1e-3, shadowCpu / args.runs);
+  for (const glm::vec4& h : hits.hits) {
+    row.shadowRays += h.w >= 0.0f;
+    row.occluded += h.w > 0.0f;
+  }
+#ifdef VKRAY_HAVE_EMBREE
+  if (embree) runEmbree(g, shadowScene, args, hits.hits, row);
+#endif
+  return row;
+}
+
+// Ratio of the round's primary-ray throughput: against Embree's where it ran, else vkray's own.
+double primaryScore(const Row& r, bool embree) {
+  return embree && r.embreePrimaryMrays() > 0 ? r.primaryMrays() / r.embreePrimaryMrays() : r.primaryMrays();
+}
+
+// The round whose primary score is the median (the lower middle one of an even count).
+Row medianRound(std::vector<Row> rounds, bool embree) {
+  std::sort(rounds.begin(), rounds.end(),
+            [&](const Row& a, const Row& b) { return primaryScore(a, embree) < primaryScore(b, embree); });
+  return rounds[(rounds.size() - 1) / 2];
+}
+
+// Median, least and largest of one figure over the rounds, as "median [min-max]".
+std::string spread(const std::vector<Row>& rounds, const std::function<double(const Row&)>& figure) {
+  std::vector<double> v;
+  for (const Row& r : rounds) v.push_back(figure(r));
+  auto [lo, hi] = std::minmax_element(v.begin(), v.end());
+  char text[64];
+  std::snprintf(text, sizeof text, "%.2f [%.2f-%.2f]", median(v), *lo, *hi);
+  return text;
+}
+
 } // namespace
 
 int runBenchMeshes(const BenchMeshesArgs& args) {
@@ -308,14 +394,18 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
 #ifdef VKRAY_HAVE_EMBREE
   embree = !args.noEmbree;
 #endif
-  std::printf("device: %s (%s), %ux%u, median of %d runs; %u CPU threads\n", context.info().name.c_str(),
-              context.info().driver.c_str(), args.width, args.height, args.runs, std::thread::hardware_concurrency());
+  std::printf("device: %s (%s), %ux%u, median of %d runs", context.info().name.c_str(), context.info().driver.c_str(),
+              args.width, args.height, args.runs);
+  if (args.rounds > 1) std::printf(", %d interleaved rounds", args.rounds);
+  std::printf("; %u CPU threads\n", std::thread::hardware_concurrency());
 #ifdef VKRAY_HAVE_EMBREE
   if (embree) std::printf("embree: %s, rtcIntersect1 / rtcOccluded1 on every CPU thread\n", RTC_VERSION_STRING);
 #endif
   if (!embree) std::printf("embree: not measured (vkray built without Embree 3, or --no-embree)\n");
   std::fflush(stdout);
+  // Two renderers on one device: the mesh without and with shadow rays (measureMesh).
   Renderer renderer(context, nullptr);
+  Renderer shadowRenderer(context, nullptr);
   RenderOptions options;
   options.countStats = false;
   // Embree traces every eye ray, the background's too: so does the renderer's column here.
@@ -323,66 +413,33 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
   options.entryPoints = !args.noEntryPoints;
   // The table is built once per mesh, as the BVH is, and timed beside it.
   options.shadowEntryPoints = args.noShadowEntryPoints ? ShadowEntries::Off : ShadowEntries::On;
-  std::vector<Row> rows;
-  for (std::size_t size : args.sizes) {
-    MeshData mesh = proceduralTorus(size);
-    Row row;
-    double build = 1e30;
-    // Eye rays alone (the light casts no shadows), then with shadow rays: the difference is what
-    // the shadow rays cost.
-    for (int pass = 0; pass < 2; ++pass) {
-      Scene scene = benchScene(mesh, args, pass == 1);
-      row.triangles = scene.triangles.size();
-      renderer.setScene(scene);
-      const GpuScene& g = renderer.gpuScene();
-      build = std::min(build, g.bvh.stats.buildMs);
-      row.nodes = g.bvh.stats.nodes;
-      row.depth = g.bvh.stats.depth;
-      row.bytesPerTriangle = static_cast<double>(g.meshBytes()) / static_cast<double>(row.triangles);
-      if (pass == 0) {
-        // The renderer's own kernel on the eye rays: one counted render (builds the pipeline), one
-        // warm-up, then the timed runs.
-        TimedRender t = timeRender(renderer, scene, scene.render, options, 1, 1);
-        auto [renderMs, renderCpuMs] = timeRenders(renderer, scene, options, args.runs);
-        row.renderMs = renderMs;
-        row.renderCpuMs = renderCpuMs;
-        row.eyeRays = t.stats.eye;
+  // Rounds are interleaved: round r of every size before round r + 1 of any, so that a slow spell
+  // of a shared machine spreads over the sizes instead of landing on one.
+  std::vector<MeshData> meshes;
+  for (std::size_t size : args.sizes) meshes.push_back(proceduralTorus(size));
+  std::vector<std::vector<Row>> bySize(meshes.size());
+  for (int round = 1; round <= args.rounds; ++round) {
+    for (std::size_t i = 0; i < meshes.size(); ++i) {
+      Row row = measureMesh(renderer, shadowRenderer, meshes[i], args, options, embree);
+      bySize[i].push_back(row);
+      if (args.rounds > 1) std::printf("round %d of %d, ", round, args.rounds);
+      std::printf("%zu triangles: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.triangles, row.buildMs,
+                  row.primaryMrays(), row.shadowMrays());
+      if (row.shadowTableMs > 0) std::printf(" (shadow entry table built in %.1f ms)", row.shadowTableMs);
+      HostPageUse pages = shadowRenderer.sceneHostPages();
+      if (pages.bytes > 0) std::printf(", huge pages %zu of %zu MiB", pages.hugeBytes >> 20, pages.bytes >> 20);
+      if (embree) {
+        std::printf(" | embree: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.embreeBuildMs,
+                    row.embreePrimaryMrays(), row.embreeShadowMrays());
       }
-      // The ray queries alone: one render builds the pipeline and gives the hits, then the runs.
-      RenderOptions query = options;
-      query.kernel = Kernel::Hits;
-      RenderResult hits = renderer.render(scene.camera, scene.render, query);
-      if (pass == 1) row.shadowTableMs = renderer.gpuScene().shadowEntryMs;
-      auto [gpuMs, cpuMs] = timeRenders(renderer, scene, query, args.runs);
-      if (pass == 0) {
-        row.primaryMs = gpuMs;
-        row.primaryCpuMs = cpuMs;
-      } else {
-        row.shadowMs = std::max(1e-3, gpuMs - row.primaryMs);
-        row.shadowCpuMs = std::max(1e-3, cpuMs - row.primaryCpuMs);
-        for (const glm::vec4& h : hits.hits) {
-          row.shadowRays += h.w >= 0.0f;
-          row.occluded += h.w > 0.0f;
-        }
-#ifdef VKRAY_HAVE_EMBREE
-        if (embree) runEmbree(g, scene, args, hits.hits, row);
-#endif
-      }
+      std::printf("\n");
+      std::fflush(stdout);
     }
-    row.buildMs = build;
-    rows.push_back(row);
-    std::printf("%zu triangles: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.triangles, row.buildMs,
-                row.primaryMrays(), row.shadowMrays());
-    if (row.shadowTableMs > 0) std::printf(" (shadow entry table built in %.1f ms)", row.shadowTableMs);
-    HostPageUse pages = renderer.sceneHostPages();
-    if (pages.bytes > 0) std::printf(", huge pages %zu of %zu MiB", pages.hugeBytes >> 20, pages.bytes >> 20);
-    if (embree) {
-      std::printf(" | embree: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.embreeBuildMs,
-                  row.embreePrimaryMrays(), row.embreeShadowMrays());
-    }
-    std::printf("\n");
-    std::fflush(stdout);
   }
+  // The table (and the CSV) shows, for each size, its median round: the one whose primary rays
+  // came out in the middle, against Embree's where Embree ran.
+  std::vector<Row> rows;
+  for (const std::vector<Row>& rounds : bySize) rows.push_back(medianRound(rounds, embree));
 
   std::printf("\n%10s %9s %9s %6s %8s %9s %9s %9s %9s %9s %9s", "triangles", "build ms", "nodes", "depth", "B/tri",
               "eye ms", "eye cpu", "eye Mr/s", "shd Mr/s", "rays", "rend Mr/s");
@@ -421,6 +478,34 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
                   r.triangles, u(r.eyeRays), u(r.hitsDiffer), u(r.farApart), r.maxRelativeTDiff, u(r.shadowRays),
                   u(r.embreeShadowRays), u(r.occluded), u(r.embreeOccluded), u(r.shadowsDiffer));
     }
+  }
+
+  if (args.rounds > 1) {
+    std::printf("\nover %d rounds, median [least-largest]%s:\n", args.rounds,
+                embree ? " of each round's ratio to Embree's" : ", Mrays/s");
+    std::printf("%10s  %-20s  %-20s  %-20s", "triangles", "primary", "shadow", "renderer");
+    if (embree) std::printf("  %-20s", "build");
+    std::printf("\n");
+    for (const std::vector<Row>& rounds : bySize) {
+      auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };
+      std::string primary, shadow, render, build;
+      if (embree) {
+        primary = spread(rounds, [&](const Row& r) { return ratio(r.primaryMrays(), r.embreePrimaryMrays()); });
+        shadow = spread(rounds, [&](const Row& r) { return ratio(r.shadowMrays(), r.embreeShadowMrays()); });
+        render = spread(rounds, [&](const Row& r) { return ratio(r.renderMrays(), r.embreePrimaryMrays()); });
+        build = spread(rounds, [&](const Row& r) { return ratio(r.buildMs, r.embreeBuildMs); });
+      } else {
+        primary = spread(rounds, [](const Row& r) { return r.primaryMrays(); });
+        shadow = spread(rounds, [](const Row& r) { return r.shadowMrays(); });
+        render = spread(rounds, [](const Row& r) { return r.renderMrays(); });
+      }
+      std::printf("%10zu  %-20s  %-20s  %-20s", rounds.front().triangles, primary.c_str(), shadow.c_str(),
+                  render.c_str());
+      if (embree) std::printf("  %-20s", build.c_str());
+      std::printf("\n");
+    }
+    std::printf("the table above and the CSV show each size's median round (by primary rays%s)\n",
+                embree ? " against Embree" : "");
   }
 
   if (!args.csv.empty()) {

@@ -16,6 +16,7 @@ struct BenchMeshesArgs {
   std::uint32_t width = 800;
   std::uint32_t height = 600;
   int runs = 5;
+  int rounds = 1; // repeats of every size, interleaved; ratios as median and range
   bool noEmbree = false;
   bool noEntryPoints = false;       // eye rays walk from the root (RenderOptions::entryPoints)
   bool noShadowEntryPoints = false; // shadow rays walk from the root (RenderOptions::shadowEntryPoints)

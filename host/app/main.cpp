@@ -136,6 +136,11 @@ int main(int argc, char** argv) {
   benchMeshesCmd->add_option("--width", benchMeshes.width, "image width")->check(CLI::Range(8, 16384));
   benchMeshesCmd->add_option("--height", benchMeshes.height, "image height")->check(CLI::Range(8, 16384));
   benchMeshesCmd->add_option("--runs", benchMeshes.runs, "timed runs per point")->check(CLI::Range(1, 1000));
+  benchMeshesCmd
+      ->add_option("--rounds", benchMeshes.rounds,
+                   "measure every size this many times, interleaved (round r of every size before round r+1 of "
+                   "any), and print each ratio's median and range over the rounds")
+      ->check(CLI::Range(1, 1000));
   benchMeshesCmd->add_flag("--no-embree", benchMeshes.noEmbree, "skip the Embree side");
   benchMeshesCmd->add_flag("--no-entry-points", benchMeshes.noEntryPoints,
                            "vkray's eye rays walk the BVH from the root, not from their tile's entry points");
