@@ -577,7 +577,12 @@ TEST(GpuBvh, EyeRayHitsEqualBruteForce) {
   auto tris = torus(48, 24); // 2304 triangles
   Image viaBvh = test::render(idScene(tris, false, BvhMode::On)).image;
   Image brute = test::render(idScene(tris, false, BvhMode::Off)).image;
+  // Two descent steps between votes (as in trees from kBvhTwoStepDepth deep on): the same hits.
+  RenderOptions twoSteps;
+  twoSteps.bvhStepsPerVote = 2;
+  Image viaTwoSteps = test::render(idScene(tris, false, BvhMode::On), twoSteps).image;
   test::expectNoValidationMessages();
+  EXPECT_TRUE(viaTwoSteps.pixels == viaBvh.pixels) << "two steps per vote changed a hit";
   ASSERT_EQ(viaBvh.pixels.size(), brute.pixels.size());
   const std::uint32_t prims = static_cast<std::uint32_t>(tris.size()) + 7;
   std::set<std::uint32_t> seen;
@@ -611,6 +616,9 @@ TEST(GpuBvh, ShadowsEqualBruteForce) {
   fromEntries.shadowEntryPoints = ShadowEntries::On; // shadow rays from their triangles' entry points
   Image viaEntries = test::render(idScene(tris, true, BvhMode::On), fromEntries).image;
   Image brute = test::render(idScene(tris, true, BvhMode::Off)).image;
+  RenderOptions twoSteps = fromEntries;
+  twoSteps.bvhStepsPerVote = 2; // two descent steps between votes, as in deep trees
+  Image viaTwoSteps = test::render(idScene(tris, true, BvhMode::On), twoSteps).image;
   Scene unshadowed = idScene(tris, true, BvhMode::On);
   unshadowed.lights[0].shadows = false;
   Image noShadows = test::render(unshadowed).image;
@@ -619,6 +627,7 @@ TEST(GpuBvh, ShadowsEqualBruteForce) {
   for (std::size_t i = 0; i < brute.pixels.size(); ++i) {
     if (brute.pixels[i] != viaBvh.pixels[i]) ++differing;
     if (brute.pixels[i] != viaEntries.pixels[i]) ++differing;
+    if (brute.pixels[i] != viaTwoSteps.pixels[i]) ++differing;
     if (brute.pixels[i] != noShadows.pixels[i]) ++shadowed;
   }
   EXPECT_EQ(differing, 0);

@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "render/kernel_variants.h"
 #include "scene/features.h"
 #include "scene/scene_loader.h"
 #include "test_support.h"
@@ -427,6 +428,32 @@ TEST(RenderSpecialization, ShadingFromTheUniformBlockAgreesWithStorage) {
   EXPECT_EQ(a.image.pixels, b.image.pixels);
   EXPECT_GT(a.stats.shadow, 0u);
   EXPECT_GT(a.stats.reflection, 0u);
+}
+
+// The BVH walk takes two descent steps between its subgroup votes in trees from
+// gpu::kBvhTwoStepDepth deep on (fewer votes where lanes rarely finish after one step), one in
+// shallower trees (where the second is often wasted), and one wherever there is no BVH; an option
+// forces either. (GpuBvh.EyeRayHitsEqualBruteForce checks that two give the same hits.)
+TEST(KernelVariants, TwoDescentStepsPerVoteInDeepTrees) {
+  Scene scene = loadScene(std::filesystem::path(VKRAY_SOURCE_DIR) / "scenes" / "meshes.json");
+  Features f = analyzeScene(scene, scene.render);
+  ASSERT_TRUE(f.useBvh);
+  auto steps = [&](int depth, bool hasBvh, int forced) {
+    SceneShape shape;
+    shape.hasBvh = hasBvh;
+    shape.bvhDepth = depth;
+    RenderOptions options;
+    options.bvhStepsPerVote = forced;
+    return specializationFor(f, scene.render, options, shape, SceneMemoryUse{}, false, false)
+        .values()
+        .at(gpu::kSpecBvhStepsPerVote);
+  };
+  EXPECT_EQ(steps(gpu::kBvhTwoStepDepth - 1, true, 0), 1u);
+  EXPECT_EQ(steps(gpu::kBvhTwoStepDepth, true, 0), 2u);
+  EXPECT_EQ(steps(40, true, 0), 2u);
+  EXPECT_EQ(steps(40, false, 0), 1u); // no BVH: no walk
+  EXPECT_EQ(steps(40, true, 1), 1u);
+  EXPECT_EQ(steps(3, true, 2), 2u);
 }
 
 } // namespace

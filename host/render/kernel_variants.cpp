@@ -28,6 +28,7 @@ SceneShape shapeOf(const GpuScene& g) {
   s.materials = g.materials.size();
   s.hasBvh = !g.bvh.nodes.empty();
   s.shadowEntries = !g.shadowEntries.empty();
+  s.bvhDepth = s.hasBvh ? g.bvh.stats.depth : 0;
   return s;
 }
 
@@ -46,6 +47,8 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecEntryPoints, useBvh && o.entryPoints && !f.thinLens);
   spec.set(gpu::kSpecShadowEntries,
            useBvh && o.shadowEntryPoints != ShadowEntries::Off && shape.shadowEntries && (all || f.shadows));
+  const int steps = o.bvhStepsPerVote > 0 ? o.bvhStepsPerVote : (shape.bvhDepth >= gpu::kBvhTwoStepDepth ? 2 : 1);
+  spec.set(gpu::kSpecBvhStepsPerVote, useBvh ? static_cast<std::uint32_t>(std::clamp(steps, 1, 2)) : 1u);
   spec.set(gpu::kSpecShadows, all || f.shadows);
   spec.set(gpu::kSpecReflection, all || f.reflection);
   spec.set(gpu::kSpecRefraction, all || f.refraction);

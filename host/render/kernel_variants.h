@@ -26,6 +26,7 @@ struct SceneShape {
   std::size_t spheres = 0, triangles = 0, polygons = 0, planes = 0, occluderPlanes = 0, lights = 0, materials = 0;
   bool hasBvh = false;
   bool shadowEntries = false; // the scene has a shadow entry points table (GpuScene::shadowEntries)
+  int bvhDepth = 0;           // the BVH's depth (BvhStats::depth), 0 without one
 };
 SceneShape shapeOf(const GpuScene& scene);
 

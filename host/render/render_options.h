@@ -87,6 +87,9 @@ struct RenderOptions {
   // Shadow rays from a triangle start their BVH walk at the (triangle, light)'s shadow entry points
   // (see ShadowEntries): --shadow-entry-points auto|on|off, --no-shadow-entry-points.
   ShadowEntries shadowEntryPoints = ShadowEntries::Auto;
+  // Descent steps of the BVH walk between two subgroup votes (kSpecBvhStepsPerVote): 0 chooses by
+  // the tree's depth (two from gpu::kBvhTwoStepDepth on), 1 or 2 forces it. The same hits either way.
+  int bvhStepsPerVote = 0;
   // render() traces only rows [rowBegin, rowEnd) (rowEnd 0: to the last row); the other rows of the
   // image are black. A tile of the image, the same pixels as rendering it whole.
   std::uint32_t rowBegin = 0;

@@ -168,34 +168,40 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints, S
   while (true) {
     if (anyLane(ref < kBvhLeafFlag)) {
       while (true) {
-        bool descending = ref < kBvhLeafFlag; // else the step changes nothing of this lane's
-        BvhWideNode node = loadBvhNode(descending ? ref : 0u);
-        float enter0 = boxEntry(r, node.min0, node.max0, hit.t);
-        float enter1 = boxEntry(r, node.min1, node.max1, hit.t);
-        uint ref0 = node.ref0;
-        uint ref1 = node.ref1;
-        bool in0 = !isinf(enter0);
-        bool in1 = !isinf(enter1);
-        // Branch-free step. The farther child is written to the free slot on top of the stack by
-        // every lane, and kept (sp advanced) only where both children are entered. The builder caps
-        // the depth at kBvhStackSize, so sp stays below it here.
-        bool firstNearer = enter0 <= enter1;
-        uint farther = firstNearer ? ref1 : ref0;
-        stack[sp] = farther;
-        uint popped = stack[max(sp - 1, 0)];
-        bool neither = !in0 && !in1;
-        uint nearer = (in0 && (firstNearer || !in1)) ? ref0 : ref1; // the nearer child entered
-        uint next = neither ? (sp > 0 ? popped : kBvhNoRef) : nearer;
-        int nextSp = sp + ((in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0));
-        // A first leaf is set aside where the stack holds more: the lane goes on with its top, the
-        // farther child just stacked or the entry below it. (Popping takes nothing from the stack
-        // a step has not already read, and pushes nothing, so the depth bound above still holds.)
-        bool setAside = !neither && nearer >= kBvhLeafFlag && postponed == kBvhNoRef && nextSp > 0;
-        postponed = (descending && setAside) ? nearer : postponed;
-        next = setAside ? ((in0 && in1) ? farther : popped) : next;
-        nextSp = setAside ? nextSp - 1 : nextSp;
-        ref = descending ? next : ref;
-        sp = descending ? nextSp : sp;
+        // BVH_STEPS_PER_VOTE steps before each vote (one, or two in a deep tree). A second step
+        // changes nothing of a lane that already holds a leaf or has finished (`descending`), and
+        // takes a lane with a leaf set aside one step on towards its second, as a vote that found
+        // other lanes still descending would: the same closest hit.
+        for (uint step = 0u; step < BVH_STEPS_PER_VOTE; ++step) {
+          bool descending = ref < kBvhLeafFlag; // else the step changes nothing of this lane's
+          BvhWideNode node = loadBvhNode(descending ? ref : 0u);
+          float enter0 = boxEntry(r, node.min0, node.max0, hit.t);
+          float enter1 = boxEntry(r, node.min1, node.max1, hit.t);
+          uint ref0 = node.ref0;
+          uint ref1 = node.ref1;
+          bool in0 = !isinf(enter0);
+          bool in1 = !isinf(enter1);
+          // Branch-free step. The farther child is written to the free slot on top of the stack by
+          // every lane, and kept (sp advanced) only where both children are entered. The builder caps
+          // the depth at kBvhStackSize, so sp stays below it here.
+          bool firstNearer = enter0 <= enter1;
+          uint farther = firstNearer ? ref1 : ref0;
+          stack[sp] = farther;
+          uint popped = stack[max(sp - 1, 0)];
+          bool neither = !in0 && !in1;
+          uint nearer = (in0 && (firstNearer || !in1)) ? ref0 : ref1; // the nearer child entered
+          uint next = neither ? (sp > 0 ? popped : kBvhNoRef) : nearer;
+          int nextSp = sp + ((in0 && in1) ? 1 : ((neither && sp > 0) ? -1 : 0));
+          // A first leaf is set aside where the stack holds more: the lane goes on with its top, the
+          // farther child just stacked or the entry below it. (Popping takes nothing from the stack
+          // a step has not already read, and pushes nothing, so the depth bound above still holds.)
+          bool setAside = !neither && nearer >= kBvhLeafFlag && postponed == kBvhNoRef && nextSp > 0;
+          postponed = (descending && setAside) ? nearer : postponed;
+          next = setAside ? ((in0 && in1) ? farther : popped) : next;
+          nextSp = setAside ? nextSp - 1 : nextSp;
+          ref = descending ? next : ref;
+          sp = descending ? nextSp : sp;
+        }
         // Done when every lane holds a leaf or one set aside, or is finished.
         if (!anyLane(ref < kBvhLeafFlag && postponed == kBvhNoRef)) break;
       }

@@ -32,6 +32,7 @@ layout(constant_id = kSpecOccluderPlaneCount) const uint OCCLUDER_PLANE_COUNT = 
 layout(constant_id = kSpecMaterialCount) const uint MATERIAL_COUNT = kRuntimeCount;
 layout(constant_id = kSpecEntryPoints) const bool ENTRY_POINTS = false;
 layout(constant_id = kSpecShadowEntries) const bool SHADOW_ENTRIES = false;
+layout(constant_id = kSpecBvhStepsPerVote) const uint BVH_STEPS_PER_VOTE = 1u;
 layout(constant_id = kSpecTextures) const bool TEXTURES = false;
 layout(constant_id = kSpecTextureFilter) const uint TEXTURE_FILTER = kTextureCone;
 layout(constant_id = kSpecAlphaMask) const bool ALPHA_MASK = false;

@@ -144,7 +144,12 @@ VKRAY_CONST(uint, kSpecRecordTree, 34u);
 // Shadow rays from a triangle start their BVH walk at the (triangle, light)'s shadow entry points
 // (host/accel/shadow_entries.h) instead of the root.
 VKRAY_CONST(uint, kSpecShadowEntries, 35u);
-VKRAY_CONST(uint, kSpecCount, 36u);
+// Descent steps of the BVH walk between two votes of its subgroup (1 or 2; shaders/lib/bvh.glsl,
+// traverseBvh). Two where the tree is at least kBvhTwoStepDepth deep: a vote costs about a tenth of
+// a step on lavapipe, and in a deep tree a lane rarely finishes its descent after the first of two.
+VKRAY_CONST(uint, kSpecBvhStepsPerVote, 36u);
+VKRAY_CONST(uint, kSpecCount, 37u);
+VKRAY_CONST(int, kBvhTwoStepDepth, 16);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
 
