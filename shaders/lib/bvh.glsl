@@ -168,7 +168,7 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints, S
   while (true) {
     // Whether to descend. In a shallow tree (one step per vote) each lane branches on its own
     // condition, and llvmpipe skips the loop when no lane takes the branch: one ballot fewer per
-    // turn, and another where a finished lane leaves the walk below (4.4 % fewer instructions at
+    // turn, and another where a finished lane leaves the walk below (4.3 % fewer instructions at
     // 1 k triangles). In a deep tree every lane enters while any must: lanes left out would change
     // the masked stack writes' per-lane branches from turn to turn, which cost more time there than
     // the ballots (docs/performance.md, "Two steps per vote in deep trees").
