@@ -155,7 +155,9 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints, S
   // "Lanes in lockstep"). Each lane still leaves a loop only when it has no work of its own in it,
   // so its walk is complete whichever lanes a ballot sees (a GPU's subgroups differ); how far it
   // gets before setting a leaf aside (below) may differ, and so the order of its tests, which
-  // leaves the closest distance the same.
+  // leaves the closest distance the same. In a shallow tree (BVH_STEPS_PER_VOTE 1) only the
+  // descent loop keeps its ballot: a lane enters it and leaves the walk on its own condition, so
+  // the mask is fixed within each run of the descent loop but not for the whole walk (`descend`).
   //
   // A lane that reaches its first leaf while others still descend would only wait for them, so it
   // sets the leaf aside (`postponed`) and goes on with the top of its stack: speculative
