@@ -232,7 +232,8 @@ void tracePhoton(uint light, uint index) {
   Light L = loadLight(light);
   vec3 lightPos = lightPosition(L);
   bool blocks = SHADOWS && castsShadows(L);
-  uint seed = hashPcg(light * 0x9e3779b9u + 0x632be5abu);
+  // render.seed moves every light's stream (seed 0: the stream it always had).
+  uint seed = hashPcg(light * 0x9e3779b9u + 0x632be5abu + frame.sampleSeed * 0x85ebca6bu);
   vec2 u = sobolOwenSample(index, seed);
   float z = 1.0 - 2.0 * u.x;
   float ring = sqrt(max(0.0, 1.0 - z * z));

@@ -241,6 +241,13 @@ vec3 traceSample(uvec2 pixel, vec2 offset, vec2 lensUv) {
   return radiance;
 }
 
+// What seeds a pixel's sample sequences: its index in the image, moved by render.seed times an odd
+// constant (the golden ratio's 32-bit fraction), so that every seed gives every pixel another key
+// and seed 0 the key it always had.
+uint pixelSequenceKey(uvec2 pixel) {
+  return pixel.y * frame.imageSize.x + pixel.x + frame.sampleSeed * 0x9e3779b9u;
+}
+
 // Sum of `count` samples starting at `base` in the pixel's sequence.
 vec3 sampleSum(uvec2 pixel, uint pixelIndex, uint base, uint count, bool center) {
   vec3 sum = vec3(0.0);
@@ -350,7 +357,7 @@ void listPass() {
   entry = min(entry, pc.tileSize.x - 1u);
   uvec2 pixel = uvec2(imageLoad(prevTexels, int(entry)).xy);
   loadEntryPoints(pixel, 0u); // the host found them for the whole image, per lane's own tile
-  uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
+  uint index = pixelSequenceKey(pixel);
   uint count = opaqueUniform(pc.sampleCount);
   // Up to three of the schedule's passes in this one (pc.segmentEnd0/1), each summed on its own, in
   // two texels per entry and pass: (sum rgb, samples) and (sum rgb of the pass's first half, rays).
@@ -453,7 +460,7 @@ void main() {
   bool inside = all(lessThan(local, pc.tileSize)) && all(lessThan(pixel, frame.imageSize));
   if (inside) {
     loadEntryPoints(pixel, pc.imageRow0);
-    uint index = pixel.y * frame.imageSize.x + pixel.x; // seeds the pixel's sample sequence
+    uint index = pixelSequenceKey(pixel);
     uint slot = (pixel.y - pc.imageRow0) * frame.imageSize.x + pixel.x;
     if (REFINE_PASS) {
       // Refined pixels get spp fresh samples; the others keep their base sample. The host may

@@ -8,6 +8,7 @@
 #include "image/image_io.h"
 #include "render/gpu_scene.h"
 #include "test_support.h"
+#include "util/error.h"
 
 namespace vkray::test {
 namespace {
@@ -63,6 +64,7 @@ struct CoverageError {
   double worst = 0.0;
   int edgePixels = 0;
   int edgeWithin = 0;
+  double edgeSquared = 0.0; // sum of the squared errors over the edge pixels
 };
 
 CoverageError coverageError(const Scene& s, const Image& img, double bottomX, double topX, double within) {
@@ -84,6 +86,7 @@ CoverageError coverageError(const Scene& s, const Image& img, double bottomX, do
       if (cov > 1e-9 && cov < 1 - 1e-9) {
         ++e.edgePixels;
         e.edgeWithin += err <= within;
+        e.edgeSquared += err * err;
       }
     }
   }
@@ -151,6 +154,59 @@ TEST(RenderAntialiasing, SlantedEdgeMatchesAnalyticCoverage) {
 TEST(RenderAntialiasing, SameCommandSameBytes) {
   Scene s = halfPlane(16);
   EXPECT_EQ(encodePng(render(s).image), encodePng(render(s).image));
+}
+
+// render.seed picks another scrambling of every pixel's sample sequence: each seed is a render as
+// good as the default, the same one every time, and the errors of different seeds are independent,
+// so the mean of four renders has about half the error of one (the same samples would keep it).
+TEST(RenderAntialiasing, SeedsAreIndependentScramblingsOfEqualQuality) {
+  Scene s = halfPlane(16);
+  const Image seed0 = render(s).image;
+  Image mean(seed0.width, seed0.height);
+  double singleRms = 0.0;
+  int edgePixels = 0;
+  for (std::uint32_t seed = 1; seed <= 4; ++seed) {
+    s.render.seed = seed;
+    const Image img = render(s).image;
+    CoverageError e = coverageError(s, img, -0.37, 0.61, 1.0 / 16.0);
+    EXPECT_LE(e.worst, 1.0 / 8.0) << "seed " << seed; // the default's bound (SlantedEdgeMatchesAnalyticCoverage)
+    singleRms += std::sqrt(e.edgeSquared / e.edgePixels) / 4.0;
+    edgePixels = e.edgePixels;
+    int differ = 0;
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) {
+      differ += img.pixels[i] != seed0.pixels[i];
+      mean.pixels[i] += img.pixels[i] * 0.25f;
+    }
+    EXPECT_GT(differ, 0) << "seed " << seed;
+    EXPECT_LE(differ, e.edgePixels) << "seed " << seed << ": only edge pixels have samples to move";
+  }
+  EXPECT_EQ(encodePng(render(s).image), encodePng(render(s).image)); // seed 4, twice
+  CoverageError m = coverageError(s, mean, -0.37, 0.61, 1.0 / 16.0);
+  const double meanRms = std::sqrt(m.edgeSquared / m.edgePixels);
+  // Independent errors: 1/sqrt(4) = 0.5 of one render's; 0.75 leaves room for 30-odd edge pixels.
+  std::printf("seeds: edge RMS error %.4f for one render, %.4f for the mean of four (%d edge pixels)\n", singleRms,
+              meanRms, edgePixels);
+  EXPECT_LT(meanRms, 0.75 * singleRms);
+  // One sample per pixel is the pixel's centre, whatever the seed.
+  Scene centre = halfPlane(1);
+  const Image c0 = render(centre).image;
+  centre.render.seed = 12345;
+  EXPECT_EQ(encodePng(render(centre).image), encodePng(c0));
+}
+
+TEST(SceneLoad, SeedIsAnUnsigned32BitInteger) {
+  const std::string camera = R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0] }, "objects": [])";
+  auto withSeed = [&](const std::string& v) { return sceneFromJson(camera + R"(, "render": { "seed": )" + v + "} }"); };
+  EXPECT_EQ(sceneFromJson(camera + " }").render.seed, 0u);
+  EXPECT_EQ(withSeed("4294967295").render.seed, 4294967295u);
+  for (const char* bad : {"-1", "4294967296", "1.5", "\"7\""}) {
+    try {
+      withSeed(bad);
+      ADD_FAILURE() << bad << " was accepted";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("render.seed"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(RenderAntialiasing, AdaptiveSupersamplesOnlyWhereNeighboursDiffer) {

@@ -160,6 +160,17 @@ TEST(SceneFingerprint, EqualScenesAgree) {
   EXPECT_EQ(sceneFingerprint(texturedTriangle(), 0), sceneFingerprint(texturedTriangle(), 0));
 }
 
+TEST(SceneFingerprint, TilesOfAnotherSeedDoNotBelong) {
+  // Another seed is another noise pattern: its tiles would not join into one render.
+  Scene s = texturedTriangle();
+  const std::string base = sceneFingerprint(s, 0);
+  s.render.seed = 1;
+  const std::string one = sceneFingerprint(s, 0);
+  s.render.seed = 2;
+  EXPECT_NE(one, base);
+  EXPECT_NE(sceneFingerprint(s, 0), one);
+}
+
 TEST(SceneFingerprint, EveryTextureInputTellsScenesApart) {
   const std::string base = sceneFingerprint(texturedTriangle(), 0);
   const std::vector<std::pair<const char*, std::function<void(Scene&)>>> changes = {

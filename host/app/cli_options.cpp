@@ -111,6 +111,8 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(CLI::Range(1ll, kMaxSpp));
   app.add_option("--max-spp", f.maxSpp, "progressive: the most samples a pixel gets (default 1024)")
       ->check(CLI::Range(1ll, kMaxSpp));
+  app.add_option("--seed", f.seed, "which scrambling of the sample sequences the pixels use (default 0)")
+      ->check(CLI::Range(0ll, 0xFFFFFFFFll));
   app.add_option("--numerics", f.numerics, "intersection numerics: robust (default) or naive")
       ->check(CLI::IsMember(enumNameList<Numerics>()));
   app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")
@@ -139,6 +141,7 @@ void applyRenderFlags(const RenderFlags& f, RenderSettings& s) {
   if (f.method) s.method = *parseEnum<Method>(*f.method);
   if (f.photons) s.photons = static_cast<std::uint64_t>(*f.photons);
   if (f.maxSpp) s.maxSpp = *f.maxSpp;
+  if (f.seed) s.seed = static_cast<std::uint32_t>(*f.seed);
   if (f.adaptiveThreshold) s.adaptiveThreshold = *f.adaptiveThreshold;
   if (f.antialiasing) s.antialiasing = *parseEnum<Antialiasing>(*f.antialiasing);
   if (f.numerics) s.numerics = *parseEnum<Numerics>(*f.numerics);

@@ -18,7 +18,7 @@ namespace vkray {
 struct RenderFlags {
   std::optional<std::uint32_t> width, height;
   std::optional<int> maxDepth, spp, minSpp, maxSpp;
-  std::optional<long long> photons;
+  std::optional<long long> photons, seed;
   std::optional<std::string> method;
   std::optional<double> bailout, adaptiveThreshold, noiseThreshold, timeLimit;
   std::optional<std::string> antialiasing, numerics, fresnel, transmissiveShadows, bvh, precision, textureFilter;

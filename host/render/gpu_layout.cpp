@@ -23,7 +23,7 @@ static_assert(sizeof(BvhWideNode) == 64 && offsetof(BvhWideNode, ref1) == 28 && 
 static_assert(sizeof(TextureRef) == kTextureRefTexels * 16 && sizeof(TextureLevel) == 16 && sizeof(UvInfo) == 16);
 static_assert(kUvRecordInfo == 3 && kUvRecordColors == kUvRecordTexels, "a uv record: 3 corners, UvInfo, colours");
 static_assert(sizeof(TileEntryPoints) == 32 && kEntryStackSlots == 6, "stack words 0..3, then 4, 5, start, height");
-static_assert(sizeof(FrameParams) == 15 * 16);
+static_assert(sizeof(FrameParams) == 16 * 16 && offsetof(FrameParams, sampleSeed) == 240);
 static_assert(offsetof(FrameParams, bailout) == 112 && offsetof(FrameParams, adaptiveThreshold) == 116);
 static_assert(offsetof(FrameParams, imageSize) == 128 && offsetof(FrameParams, maxDepth) == 140);
 static_assert(offsetof(FrameParams, sphereCount) == 144 && offsetof(FrameParams, polygonCount) == 156);

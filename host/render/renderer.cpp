@@ -820,6 +820,7 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.triangleBoundsMax = glm::vec4(g.triangleBounds.max, 0.0f);
   p.polygonBoundsMin = glm::vec4(g.polygonBounds.min, 0.0f);
   p.polygonBoundsMax = glm::vec4(g.polygonBounds.max, 0.0f);
+  p.sampleSeed = s.seed;
   frameBuffer_->write(&p, sizeof p);
   frameWidth_ = s.width;
   frameHeight_ = s.height;

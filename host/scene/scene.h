@@ -102,6 +102,10 @@ struct RenderSettings {
   double timeLimit = 0.0;
   int minSpp = 4;
   int maxSpp = 1024;
+  // Which of the sample sequences' independent scramblings the pixels use (0: the default). Another
+  // seed gives another, equally good set of sample positions: another noise pattern over the same
+  // expected image (for animation frames, or to measure noise against itself).
+  std::uint32_t seed = 0;
   // Forward tracing (method forward): photons each light emits; 0: kDefaultPhotons, or with a time
   // limit as many as the time allows. A time limit may stop a given count sooner.
   Method method = Method::Backward;

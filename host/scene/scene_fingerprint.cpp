@@ -73,6 +73,7 @@ std::string sceneFingerprint(const Scene& s, int frame) {
   h.u64(static_cast<std::uint64_t>(r.bvh));
   h.u64(static_cast<std::uint64_t>(r.precision));
   h.u64(static_cast<std::uint64_t>(r.textureFilter));
+  if (r.seed != 0) h.u64(0x5eed0000ull + r.seed); // absent at seed 0: older tiles keep their fingerprint
   h.vec(s.camera.position);
   h.vec(s.camera.lookAt);
   h.vec(s.camera.up);

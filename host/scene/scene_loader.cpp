@@ -111,7 +111,7 @@ void readImage(const JsonNode& node, Scene& scene, bool& sawBackground, bool& sa
 void readRender(const JsonNode& node, RenderSettings& r) {
   node.allowKeys({"max_depth", "spp", "bailout", "antialiasing", "adaptive_threshold", "numerics", "fresnel",
                   "transmissive_shadows", "precision", "bvh", "texture_filter", "noise_threshold", "time_limit",
-                  "min_spp", "max_spp", "method", "photons"});
+                  "min_spp", "max_spp", "method", "photons", "seed"});
   if (auto v = node.find("max_depth")) r.maxDepth = static_cast<int>(v->integer(0, kMaxDepthLimit));
   if (auto v = node.find("spp")) r.spp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("bailout")) r.bailout = v->number(0.0, 1.0);
@@ -135,6 +135,7 @@ void readRender(const JsonNode& node, RenderSettings& r) {
   if (auto v = node.find("photons")) r.photons = static_cast<std::uint64_t>(v->integer(1, kMaxPhotons));
   if (auto v = node.find("min_spp")) r.minSpp = static_cast<int>(v->integer(1, kMaxSpp));
   if (auto v = node.find("max_spp")) r.maxSpp = static_cast<int>(v->integer(1, kMaxSpp));
+  if (auto v = node.find("seed")) r.seed = static_cast<std::uint32_t>(v->integer(0, 0xFFFFFFFFll));
 }
 
 Material readMaterial(const JsonNode& node, const std::string& name) {

@@ -22,7 +22,7 @@ bool sameKnobs(const RenderSettings& a, const RenderSettings& b) {
   return a.maxDepth == b.maxDepth && a.spp == b.spp && a.bailout == b.bailout && a.antialiasing == b.antialiasing &&
          a.adaptiveThreshold == b.adaptiveThreshold && a.numerics == b.numerics && a.fresnel == b.fresnel &&
          a.transmissiveShadows == b.transmissiveShadows && a.bvh == b.bvh && a.precision == b.precision &&
-         a.textureFilter == b.textureFilter;
+         a.textureFilter == b.textureFilter && a.seed == b.seed;
 }
 
 DisplayMode nextDisplayMode(DisplayMode mode) {

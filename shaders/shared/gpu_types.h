@@ -467,6 +467,10 @@ struct FrameParams {
   vec4 triangleBoundsMax;
   vec4 polygonBoundsMin;
   vec4 polygonBoundsMax;
+  // render.seed: mixed into each pixel's key for its sample sequences (0: the key is the pixel's
+  // index, as it always was), and into the forward tracer's photon streams.
+  uint sampleSeed;
+  uint framePad0, framePad1, framePad2;
 };
 
 // ---- Ray counters --------------------------------------------------------------------------------
