@@ -129,6 +129,22 @@ TEST(AnimationFrame, DistinctFramesHaveDistinctFingerprints) {
   EXPECT_THROW(sceneAtFrame(scene, *scene.animation, 10), InputError);
 }
 
+TEST(AnimationFrame, AnAnimatedSeedGivesEachFrameItsOwn) {
+  // Without animated_seed every frame samples with render.seed; with it, frame N with seed + N
+  // (wrapping), so tiles of one frame still agree and two frames do not share a noise pattern.
+  nlohmann::json doc = nlohmann::json::parse(kAnimated, nullptr, true, true);
+  doc["render"]["seed"] = 4294967290u;
+  Scene still = loadSceneFromString(doc.dump(), "anim.json");
+  for (int f : {0, 5, 9}) EXPECT_EQ(sceneAtFrame(still, *still.animation, f).render.seed, 4294967290u);
+  doc["animation"]["animated_seed"] = true;
+  Scene moving = loadSceneFromString(doc.dump(), "anim.json");
+  EXPECT_EQ(sceneAtFrame(moving, *moving.animation, 0).render.seed, 4294967290u);
+  EXPECT_EQ(sceneAtFrame(moving, *moving.animation, 5).render.seed, 4294967295u);
+  EXPECT_EQ(sceneAtFrame(moving, *moving.animation, 9).render.seed, 3u);
+  doc["animation"]["animated_seed"] = 1;
+  EXPECT_THROW(loadSceneFromString(doc.dump(), "anim.json"), InputError);
+}
+
 // A mesh rotated and scaled about its centre equals the mesh placed by the composed matrix.
 TEST(AnimationFrame, MeshRotateScaleAboutItsCentre) {
   namespace fs = std::filesystem;

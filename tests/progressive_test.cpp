@@ -522,6 +522,39 @@ TEST(RenderProgressive, ErrorEstimateIsCalibratedAgainstAReference) {
   for (float spp : r.pixels.samples) EXPECT_EQ(spp, 64.0f);
 }
 
+TEST(RenderProgressive, ErrorEstimateIsCalibratedAgainstAnIndependentRender) {
+  // The same at 64 spp, against no reference: two renders with other seeds (render.seed) are
+  // independent, so the difference of their means has twice one mean's variance, and |a - b| / sqrt 2
+  // measures one render's error without sharing its samples (the reference above shares its first
+  // 64 with the render it checks).
+  Scene s = noisyScene();
+  s.render.spp = 64;
+  RenderOptions o;
+  o.pixelStats = true;
+  s.render.seed = 1;
+  RenderResult a = render(s, o);
+  s.render.seed = 2;
+  RenderResult b = render(s, o);
+  ASSERT_EQ(a.pixels.error.size(), a.image.pixels.size());
+  ASSERT_EQ(b.pixels.error.size(), b.image.pixels.size());
+  double est2 = 0.0, dev2 = 0.0;
+  int noisy = 0;
+  for (std::size_t i = 0; i < a.image.pixels.size(); ++i) {
+    const double dev = maxChannelDiff(a.image.pixels[i], b.image.pixels[i]);
+    const double est = 0.5 * (a.pixels.error[i] * a.pixels.error[i] + b.pixels.error[i] * b.pixels.error[i]);
+    if (est < 1e-12 && dev < 1e-6) continue; // no noise: nothing to calibrate
+    est2 += est;
+    dev2 += 0.5 * dev * dev;
+    ++noisy;
+  }
+  ASSERT_GT(noisy, 100);
+  const double ratio = std::sqrt(est2 / dev2);
+  std::printf("calibration against another seed: %d noisy pixels, RMS estimate / RMS deviation = %.3f\n", noisy, ratio);
+  // The same factor 2 either way as against the reference (see the log line for both).
+  EXPECT_GT(ratio, 0.5);
+  EXPECT_LT(ratio, 2.0);
+}
+
 TEST(RenderProgressive, PixelStatisticsDoNotChangeTheImage) {
   // The progressive path at a fixed spp traces the same samples as a uniform render: the same
   // image up to the order of float additions (the host adds two halves in double).

@@ -209,7 +209,7 @@ dvec3 interpolate(const Track<dvec3>& track, double frame, Interpolation mode) {
 }
 
 Animation readAnimation(const JsonNode& node, const Scene& scene) {
-  node.allowKeys({"frames", "fps", "interpolation", "camera", "objects", "lights"});
+  node.allowKeys({"frames", "fps", "interpolation", "animated_seed", "camera", "objects", "lights"});
   Animation a;
   a.file = scene.path.string();
   a.frames = static_cast<int>(node.at("frames").integer(1, kMaxFrames));
@@ -217,6 +217,7 @@ Animation readAnimation(const JsonNode& node, const Scene& scene) {
   if (auto v = node.find("interpolation")) {
     a.interpolation = v->enumValue<Interpolation>();
   }
+  if (auto v = node.find("animated_seed")) a.animatedSeed = v->boolean();
   if (auto v = node.find("camera")) readCameraKeys(*v, a);
   if (auto v = node.find("objects")) readObjectKeys(*v, scene, a);
   if (auto v = node.find("lights")) readLightKeys(*v, scene, a);
@@ -235,6 +236,7 @@ Scene sceneAtFrame(const Scene& scene, const Animation& a, int frame) {
   const Interpolation mode = a.interpolation;
   const double f = frame;
   Scene out = scene;
+  if (a.animatedSeed) out.render.seed = scene.render.seed + static_cast<std::uint32_t>(frame); // wraps past 2^32 - 1
 
   Camera& cam = out.camera;
   if (!a.camera.position.empty()) cam.position = interpolate(a.camera.position, f, mode);

@@ -60,6 +60,9 @@ struct Animation {
   int frames = 1;
   double fps = 24.0;
   Interpolation interpolation = Interpolation::Linear;
+  // Frame N samples with render.seed + N (each frame its own noise pattern) instead of every frame
+  // with render.seed (one pattern that stays put on the screen).
+  bool animatedSeed = false;
   CameraTracks camera;
   std::vector<ObjectTracks> objects;
   std::vector<LightTracks> lights;
