@@ -484,6 +484,19 @@ void expectTheSameRender(const RenderResult& a, const RenderResult& b) {
   EXPECT_EQ(a.stats.total(), b.stats.total());
 }
 
+// Squared error estimates against squared deviations, summed over the pixels that have noise at all.
+struct Calibration {
+  double est2 = 0.0, dev2 = 0.0;
+  int noisy = 0;
+  void add(double estimateSquared, double deviationSquared) {
+    if (estimateSquared < 1e-12 && deviationSquared < 1e-12) return; // no noise: nothing to calibrate
+    est2 += estimateSquared;
+    dev2 += deviationSquared;
+    ++noisy;
+  }
+  double ratio() const { return std::sqrt(est2 / dev2); } // RMS estimate over RMS deviation
+};
+
 // The 1024-sample reference, once per process.
 const Image& reference() {
   static const Image ref = uniform(noisyScene(), 1024);
@@ -502,23 +515,17 @@ TEST(RenderProgressive, ErrorEstimateIsCalibratedAgainstAReference) {
   RenderResult r = render(s, o);
   ASSERT_EQ(r.pixels.error.size(), r.image.pixels.size());
   const Image& ref = reference();
-  double est2 = 0.0, dev2 = 0.0;
-  int noisy = 0;
+  Calibration c;
   for (std::size_t i = 0; i < ref.pixels.size(); ++i) {
     const double dev = maxChannelDiff(r.image.pixels[i], ref.pixels[i]);
-    const double est = r.pixels.error[i];
-    if (est < 1e-6 && dev < 1e-6) continue; // no noise: nothing to calibrate
-    est2 += est * est;
-    dev2 += dev * dev;
-    ++noisy;
+    c.add(r.pixels.error[i] * r.pixels.error[i], dev * dev);
   }
-  ASSERT_GT(noisy, 100);
-  const double ratio = std::sqrt(est2 / dev2);
+  ASSERT_GT(c.noisy, 100);
   // A split-half estimate has one degree of freedom per channel and pixel; over hundreds of pixels
   // the RMS agrees within a factor 2 either way (measured: see the log line).
-  std::printf("calibration: %d noisy pixels, RMS estimate / RMS deviation = %.3f\n", noisy, ratio);
-  EXPECT_GT(ratio, 0.5);
-  EXPECT_LT(ratio, 2.0);
+  std::printf("calibration: %d noisy pixels, RMS estimate / RMS deviation = %.3f\n", c.noisy, c.ratio());
+  EXPECT_GT(c.ratio(), 0.5);
+  EXPECT_LT(c.ratio(), 2.0);
   for (float spp : r.pixels.samples) EXPECT_EQ(spp, 64.0f);
 }
 
@@ -537,22 +544,17 @@ TEST(RenderProgressive, ErrorEstimateIsCalibratedAgainstAnIndependentRender) {
   RenderResult b = render(s, o);
   ASSERT_EQ(a.pixels.error.size(), a.image.pixels.size());
   ASSERT_EQ(b.pixels.error.size(), b.image.pixels.size());
-  double est2 = 0.0, dev2 = 0.0;
-  int noisy = 0;
+  Calibration c;
   for (std::size_t i = 0; i < a.image.pixels.size(); ++i) {
     const double dev = maxChannelDiff(a.image.pixels[i], b.image.pixels[i]);
-    const double est = 0.5 * (a.pixels.error[i] * a.pixels.error[i] + b.pixels.error[i] * b.pixels.error[i]);
-    if (est < 1e-12 && dev < 1e-6) continue; // no noise: nothing to calibrate
-    est2 += est;
-    dev2 += 0.5 * dev * dev;
-    ++noisy;
+    c.add(0.5 * (a.pixels.error[i] * a.pixels.error[i] + b.pixels.error[i] * b.pixels.error[i]), 0.5 * dev * dev);
   }
-  ASSERT_GT(noisy, 100);
-  const double ratio = std::sqrt(est2 / dev2);
-  std::printf("calibration against another seed: %d noisy pixels, RMS estimate / RMS deviation = %.3f\n", noisy, ratio);
+  ASSERT_GT(c.noisy, 100);
+  std::printf("calibration against another seed: %d noisy pixels, RMS estimate / RMS deviation = %.3f\n", c.noisy,
+              c.ratio());
   // The same factor 2 either way as against the reference (see the log line for both).
-  EXPECT_GT(ratio, 0.5);
-  EXPECT_LT(ratio, 2.0);
+  EXPECT_GT(c.ratio(), 0.5);
+  EXPECT_LT(c.ratio(), 2.0);
 }
 
 TEST(RenderProgressive, PixelStatisticsDoNotChangeTheImage) {

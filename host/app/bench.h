@@ -74,6 +74,10 @@ struct BenchAdaptiveArgs {
   std::uint32_t height = 180;
   bool sceneSize = false; // each scene at its own image size instead of `height` rows
   int referenceSpp = 1024;
+  // The reference's render.seed: 0 shares its first samples with every point (their errors are
+  // understated alike, and a pixel at the reference's count has none); another seed makes it
+  // independent of them, at the price of its own noise in every error.
+  std::uint32_t referenceSeed = 0;
   std::vector<double> thresholds{0.016, 0.008, 0.004, 0.002};
   int minSpp = 4, maxSpp = 1024;              // the thresholds' min_spp and max_spp
   int minUniformSpp = 4, maxUniformSpp = 256; // uniform sampling at the powers of two between

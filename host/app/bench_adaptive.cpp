@@ -68,10 +68,12 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
     RenderOptions options;
     options.countStats = false;
 
-    // The reference: uniform, many samples (it shares its first samples with every point below,
-    // which understates their errors alike; 4x the largest uniform point keeps that small).
+    // The reference: uniform, many samples. With seed 0 it shares its first samples with every
+    // point below, which understates their errors alike (4x the largest uniform point keeps that
+    // small); with --reference-seed it shares none.
     RenderSettings refSettings = scene.render;
     refSettings.spp = args.referenceSpp;
+    refSettings.seed = args.referenceSeed;
     Image reference = renderer.render(scene.camera, refSettings, options).image;
 
     std::vector<Point> uniform, adaptive;
@@ -116,9 +118,10 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
       for (Point* p : all) p->ms.push_back(renderer.render(scene.camera, p->settings, options).timings.traceMs);
     }
 
-    std::printf("\n%s, %ux%u, reference %d spp, %d interleaved runs (GPU trace ms: median [min, max])\n",
+    const std::string seed = args.referenceSeed ? " (seed " + std::to_string(args.referenceSeed) + ")" : "";
+    std::printf("\n%s, %ux%u, reference %d spp%s, %d interleaved runs (GPU trace ms: median [min, max])\n",
                 path.filename().string().c_str(), scene.render.width, scene.render.height, args.referenceSpp,
-                args.runs);
+                seed.c_str(), args.runs);
     std::printf("%-12s %9s %10s %12s %24s\n", "uniform", "spp", "p95 error", "rays", "trace ms");
     for (const Point& p : uniform) {
       std::printf("%-12s %9d %10.5f %12llu %10.2f [%.2f, %.2f]\n", p.label.c_str(), p.settings.spp, p.p95,

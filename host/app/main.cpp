@@ -184,6 +184,11 @@ int main(int argc, char** argv) {
       ->excludes(adaptiveHeight);
   benchAdaptiveCmd->add_option("--reference-spp", benchAdaptive.referenceSpp, "samples per pixel of the reference")
       ->check(CLI::Range(1, 4096));
+  benchAdaptiveCmd
+      ->add_option("--reference-seed", benchAdaptive.referenceSeed,
+                   "render.seed of the reference: 0 (default) shares its first samples with every point, another "
+                   "seed none (its own noise then adds to every error: raise --reference-spp)")
+      ->check(CLI::Range(0ll, 0xFFFFFFFFll));
   benchAdaptiveCmd->add_option("--thresholds", benchAdaptive.thresholds, "noise thresholds, comma-separated")
       ->delimiter(',')
       ->allow_extra_args(false) // one argument, split at the commas: the scenes that follow stay scenes
