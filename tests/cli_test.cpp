@@ -278,6 +278,24 @@ TEST_F(Cli, StepLogNamesEveryStepAndHowLongItTook) {
   // Off (the default), a run prints nothing on standard error (Cli.RendersAPngWithStatistics).
 }
 
+TEST_F(Cli, SeedFlagPicksAnotherNoisePatternAndSaysSo) {
+  auto renderWith = [&](const std::string& flags, const fs::path& out) {
+    return vkray("render '" + scene("showcase.json") + "' -o '" + out.string() +
+                 "' --width 32 --height 24 --spp 4 --stats " + flags);
+  };
+  RunResult a = renderWith("", dir_ / "a.pfm");
+  RunResult b = renderWith("--seed 7", dir_ / "b.pfm");
+  ASSERT_EQ(a.exitCode, 0) << a.err;
+  ASSERT_EQ(b.exitCode, 0) << b.err;
+  EXPECT_EQ(a.out.find("seed: "), std::string::npos) << "seed 0 prints nothing";
+  EXPECT_NE(b.out.find("\nseed: 7\n"), std::string::npos) << b.out;
+  EXPECT_NE(readImage(dir_ / "a.pfm").pixels, readImage(dir_ / "b.pfm").pixels);
+  RunResult bad = renderWith("--seed 4294967296", dir_ / "c.pfm");
+  EXPECT_NE(bad.exitCode, 0);
+  EXPECT_NE(bad.err.find("--seed"), std::string::npos) << bad.err;
+  EXPECT_FALSE(fs::exists(dir_ / "c.pfm"));
+}
+
 TEST_F(Cli, ExplainSaysWhatTheSceneCallsFor) {
   RunResult r = vkray("render '" + scene("seed.json") + "' -o '" + (dir_ / "x.png").string() +
                       "' --width 8 --height 8 --explain -q");

@@ -227,6 +227,7 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
     }
   }
   std::printf("max depth: %d\n", scene.render.maxDepth);
+  if (scene.render.seed != 0) std::printf("seed: %u\n", scene.render.seed);
   if (!args.explain) { // --explain printed the same lines above
     for (const auto& line : result.features.explain()) std::printf("%s\n", line.c_str());
   }
