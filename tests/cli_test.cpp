@@ -355,6 +355,31 @@ TEST_F(Cli, AdaptiveTilesOfAFrameRangeMergeExactly) {
   }
 }
 
+TEST_F(Cli, TilesOfAnotherThresholdOrSeedDoNotMerge) {
+  // Two bands of one scene, the second at another noise threshold (or seed): not one image.
+  std::string scene = this->scene("showcase.json");
+  std::string flags = " --width 40 --height 30 -q";
+  auto tile = [&](int i, const std::string& extra, const std::string& name) {
+    return vkray("render " + scene + " --tile " + std::to_string(i) + "/2" + flags + extra + " -o '" +
+                 (dir_ / name).string() + "'");
+  };
+  ASSERT_EQ(tile(1, " --noise-threshold 0.02", "a1.pfm").exitCode, 0);
+  ASSERT_EQ(tile(2, " --noise-threshold 0.02", "a2.pfm").exitCode, 0);
+  ASSERT_EQ(tile(2, " --noise-threshold 0.01", "b2.pfm").exitCode, 0);
+  ASSERT_EQ(tile(2, " --noise-threshold 0.02 --seed 3", "c2.pfm").exitCode, 0);
+  auto merge = [&](const std::string& second, const std::string& out) {
+    return vkray("merge -o '" + (dir_ / out).string() + "' '" + (dir_ / "a1.pfm").string() + "' '" +
+                 (dir_ / second).string() + "'");
+  };
+  EXPECT_EQ(merge("a2.pfm", "ok.pfm").exitCode, 0);
+  for (const char* second : {"b2.pfm", "c2.pfm"}) {
+    RunResult r = merge(second, "bad.pfm");
+    EXPECT_NE(r.exitCode, 0) << second;
+    EXPECT_NE(r.err.find(second), std::string::npos) << r.err; // the line names the tile at fault
+    EXPECT_FALSE(fs::exists(dir_ / "bad.pfm"));
+  }
+}
+
 // Frames and tiles: a frame of the animated scene is the static scene with its values written in,
 // a range writes one file per frame, tiles merge into the whole image byte for byte, and bad
 // frame, tile and pattern flags fail with one line and write nothing.

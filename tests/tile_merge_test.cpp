@@ -160,15 +160,29 @@ TEST(SceneFingerprint, EqualScenesAgree) {
   EXPECT_EQ(sceneFingerprint(texturedTriangle(), 0), sceneFingerprint(texturedTriangle(), 0));
 }
 
-TEST(SceneFingerprint, TilesOfAnotherSeedDoNotBelong) {
-  // Another seed is another noise pattern: its tiles would not join into one render.
-  Scene s = texturedTriangle();
-  const std::string base = sceneFingerprint(s, 0);
-  s.render.seed = 1;
-  const std::string one = sceneFingerprint(s, 0);
-  s.render.seed = 2;
-  EXPECT_NE(one, base);
-  EXPECT_NE(sceneFingerprint(s, 0), one);
+TEST(SceneFingerprint, EveryProgressiveForwardAndSeedSettingTellsScenesApart) {
+  // Tiles rendered to another threshold, budget, sample range, method, photon count or seed are
+  // tiles of another image: merge must refuse them.
+  const std::string base = sceneFingerprint(texturedTriangle(), 0);
+  const std::vector<std::pair<const char*, std::function<void(Scene&)>>> changes = {
+      {"noise threshold", [](Scene& s) { s.render.noiseThreshold = 0.01; }},
+      {"time limit", [](Scene& s) { s.render.timeLimit = 2.0; }},
+      {"min spp", [](Scene& s) { s.render.minSpp = 8; }},
+      {"max spp", [](Scene& s) { s.render.maxSpp = 256; }},
+      {"method", [](Scene& s) { s.render.method = Method::Forward; }},
+      {"photons", [](Scene& s) { s.render.photons = 12345; }},
+      {"seed", [](Scene& s) { s.render.seed = 1; }},
+  };
+  for (const auto& [what, change] : changes) {
+    Scene s = texturedTriangle();
+    change(s);
+    EXPECT_NE(sceneFingerprint(s, 0), base) << what;
+  }
+  Scene two = texturedTriangle();
+  two.render.seed = 2;
+  Scene one = texturedTriangle();
+  one.render.seed = 1;
+  EXPECT_NE(sceneFingerprint(two, 0), sceneFingerprint(one, 0));
 }
 
 TEST(SceneFingerprint, EveryTextureInputTellsScenesApart) {

@@ -57,7 +57,7 @@ void hashTexture(Hasher& h, const Texture& t) {
 
 std::string sceneFingerprint(const Scene& s, int frame) {
   Hasher h;
-  h.u64(2); // encoding version
+  h.u64(3); // encoding version (3: the progressive, forward and seed settings)
   h.u64(static_cast<std::uint64_t>(frame));
   const RenderSettings& r = s.render;
   h.u64(r.width);
@@ -73,7 +73,15 @@ std::string sceneFingerprint(const Scene& s, int frame) {
   h.u64(static_cast<std::uint64_t>(r.bvh));
   h.u64(static_cast<std::uint64_t>(r.precision));
   h.u64(static_cast<std::uint64_t>(r.textureFilter));
-  if (r.seed != 0) h.u64(0x5eed0000ull + r.seed); // absent at seed 0: older tiles keep their fingerprint
+  // What else decides the pixels: a noise threshold's or time limit's passes, a forward render's
+  // photons, the sample sequences' scrambling.
+  h.f64(r.noiseThreshold);
+  h.f64(r.timeLimit);
+  h.u64(static_cast<std::uint64_t>(r.minSpp));
+  h.u64(static_cast<std::uint64_t>(r.maxSpp));
+  h.u64(static_cast<std::uint64_t>(r.method));
+  h.u64(r.photons);
+  h.u64(r.seed);
   h.vec(s.camera.position);
   h.vec(s.camera.lookAt);
   h.vec(s.camera.up);
