@@ -4,7 +4,9 @@
 // On the GPU (GpuBvh): the kernel's traversal finds the same primitive as its brute-force loops for
 // every eye ray, and the same shadows.
 #include <algorithm>
+#include <bit>
 #include <cmath>
+#include <limits>
 #include <random>
 #include <set>
 #include <vector>
@@ -12,6 +14,7 @@
 #include <gtest/gtest.h>
 
 #include "accel/bvh.h"
+#include "accel/bvh_records.h"
 #include "accel/shadow_entries.h"
 #include "render/gpu_scene.h"
 #include "test_support.h"
@@ -409,6 +412,68 @@ TEST(BvhBuild, WideRecordsHoldTheSameTree) {
     EXPECT_EQ(leavesSeen, leaves);
     for (int seen : entrySeen) EXPECT_EQ(seen, 1);
   }
+}
+
+// The kernels' three-texel records (packBvhRecords): both references come back as they were, and each
+// box holds the exact one, larger by no more than the rounding the packing allows (a block of 256 ulps,
+// 2^-15 of a coordinate, or the smallest normal's neighbourhood at zero).
+TEST(BvhBuild, PackedRecordsKeepTheReferencesAndHoldTheBoxes) {
+  for (const Case& c : cases()) {
+    SCOPED_TRACE(c.name);
+    Bvh bvh = buildBvh(primitivesOf(c.tris));
+    std::vector<gpu::BvhWideNode> wide;
+    wideBvh(bvh, wide);
+    std::vector<glm::uvec4> texels = packBvhRecords(wide);
+    ASSERT_EQ(texels.size(), wide.size() * gpu::kBvhRecordTexels);
+    auto slack = [](float v) { return std::abs(v) * 0x1p-14f + 0x1p-125f; };
+    for (std::uint32_t i = 0; i < wide.size(); ++i) {
+      const gpu::BvhWideNode& w = wide[i];
+      gpu::BvhWideNode p = unpackBvhRecord(texels, i);
+      ASSERT_EQ(p.ref0, w.ref0) << "record " << i;
+      ASSERT_EQ(p.ref1, w.ref1) << "record " << i;
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_LE(p.min0[k], w.min0[k]);
+        ASSERT_GE(p.max0[k], w.max0[k]);
+        ASSERT_LE(p.min1[k], w.min1[k]);
+        ASSERT_GE(p.max1[k], w.max1[k]);
+        ASSERT_LE(w.min0[k] - p.min0[k], slack(w.min0[k]));
+        ASSERT_LE(p.max0[k] - w.max0[k], slack(w.max0[k]));
+        ASSERT_LE(w.min1[k] - p.min1[k], slack(w.min1[k]));
+        ASSERT_LE(p.max1[k] - w.max1[k], slack(w.max1[k]));
+      }
+    }
+  }
+}
+
+// A bound that carries a byte stays on its side of the value for every byte, at zero (either sign),
+// among denormals (which a device may flush to zero: an outward bound is never one), at the largest
+// coordinates a scene may have and beyond them (refused).
+TEST(BvhBuild, BoundsCarryingAByteStayOutsideTheValue) {
+  const float values[] = {0.0f,    -0.0f, 1e-45f, -1e-45f, 1e-39f, -1e-39f,  0x1p-126f, -0x1p-126f, 1e-30f,
+                          -1e-30f, 0.5f,  -0.5f,  1.0f,    -1.0f,  3.14159f, -2.71828f, 1e18f,      -1e18f};
+  for (float v : values) {
+    for (std::uint32_t byte = 0; byte < 256; ++byte) {
+      float lo = std::bit_cast<float>(lowerBoundWithByte(v, byte));
+      float hi = std::bit_cast<float>(upperBoundWithByte(v, byte));
+      ASSERT_EQ(lowerBoundWithByte(v, byte) & 0xFFu, byte);
+      ASSERT_EQ(upperBoundWithByte(v, byte) & 0xFFu, byte);
+      ASSERT_TRUE(std::isfinite(lo) && std::isfinite(hi)) << v;
+      ASSERT_LE(lo, v) << v << " byte " << byte;
+      ASSERT_GE(hi, v) << v << " byte " << byte;
+      // Flushed to zero, a denormal bound moves towards zero: only one moved towards zero may be one.
+      if (v > 0.0f) {
+        ASSERT_EQ(std::fpclassify(hi), FP_NORMAL) << v;
+      }
+      if (v < 0.0f) {
+        ASSERT_EQ(std::fpclassify(lo), FP_NORMAL) << v;
+      }
+      ASSERT_LE(v - lo, std::abs(v) * 0x1p-14f + 0x1p-125f);
+      ASSERT_LE(hi - v, std::abs(v) * 0x1p-14f + 0x1p-125f);
+    }
+  }
+  EXPECT_THROW(lowerBoundWithByte(2e38f, 0u), Error);
+  EXPECT_THROW(upperBoundWithByte(-std::numeric_limits<float>::infinity(), 0u), Error);
+  EXPECT_THROW(upperBoundWithByte(std::numeric_limits<float>::quiet_NaN(), 0u), Error);
 }
 
 TEST(BvhBuild, ClosestHitsEqualBruteForceBitForBit) {

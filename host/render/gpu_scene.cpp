@@ -144,7 +144,7 @@ void buildShadowEntries(GpuScene& g, const ShadowEntryOptions& options) {
 }
 
 std::size_t GpuScene::bvhBytes() const {
-  return bvhNodes.size() * sizeof(gpu::BvhWideNode) + bvh.primRefs.size() * sizeof(std::uint32_t);
+  return bvhNodes.size() * gpu::kBvhRecordTexels * sizeof(glm::uvec4) + bvh.primRefs.size() * sizeof(std::uint32_t);
 }
 
 std::size_t GpuScene::meshBytes() const {

@@ -5,6 +5,7 @@
 #include <chrono>
 #include <string>
 
+#include "accel/bvh_records.h"
 #include "util/error.h"
 
 namespace vkray {
@@ -86,12 +87,13 @@ void SceneBuffers::upload(const GpuScene& g) {
 void SceneBuffers::uploadBvhNodes(const GpuScene& g) {
   // The records, then the shadow entry points' table (FrameParams::shadowEntryBase).
   auto& nodes = buffers_[gpu::kBindingBvhNodes];
-  const std::size_t recordBytes = g.bvhNodes.size() * sizeof(gpu::BvhWideNode);
+  const std::vector<glm::uvec4> records = packBvhRecords(g.bvhNodes);
+  const std::size_t recordBytes = records.size() * sizeof(glm::uvec4);
   const std::size_t tableBytes = g.shadowEntries.size() * sizeof(glm::uvec4);
   nodes.reset(); // the old array's memory goes back first
   nodes = std::make_unique<vulkan::Buffer>(context_, recordBytes + tableBytes, vk::Format::eR32G32B32A32Uint,
                                            vulkan::MemoryUse::DeviceLocal, "BVH nodes");
-  nodes->write(g.bvhNodes.data(), recordBytes);
+  nodes->write(records.data(), recordBytes);
   if (tableBytes > 0) nodes->write(g.shadowEntries.data(), tableBytes, recordBytes);
 }
 

@@ -123,13 +123,18 @@ vec3 loadPolyVertex(uint i) {
   return polyVertices[i].xyz;
 }
 BvhWideNode loadBvhNode(uint i) {
-  int n = int(4u * i);
+  // Three texels (host/accel/bvh_records.h): min0.xyz max0.x | max0.yz min1.xy | min1.z max1.xyz, the
+  // references in the low bytes of the first eight words; each bound was rounded outwards before its
+  // byte went in, so the boxes are used as they are. A fourth texel read is a call of the texel-fetch
+  // function on llvmpipe, dearer than the twenty-odd vector operations that take the bytes out.
+  int n = int(kBvhRecordTexels * i);
   uvec4 a = imageLoad(nodeTexels, n);
   uvec4 b = imageLoad(nodeTexels, n + 1);
   uvec4 c = imageLoad(nodeTexels, n + 2);
-  uvec4 d = imageLoad(nodeTexels, n + 3);
-  return BvhWideNode(uintBitsToFloat(a.xyz), a.w, uintBitsToFloat(b.xyz), b.w, uintBitsToFloat(c.xyz), c.w,
-                     uintBitsToFloat(d.xyz), d.w);
+  uint ref0 = (a.x & 0xFFu) | ((a.y & 0xFFu) << 8u) | ((a.z & 0xFFu) << 16u) | (a.w << 24u);
+  uint ref1 = (b.x & 0xFFu) | ((b.y & 0xFFu) << 8u) | ((b.z & 0xFFu) << 16u) | (b.w << 24u);
+  return BvhWideNode(uintBitsToFloat(a.xyz), ref0, uintBitsToFloat(uvec3(a.w, b.xy)), ref1, uintBitsToFloat(uvec3(b.zw, c.x)),
+                     0u, uintBitsToFloat(c.yzw), 0u);
 }
 
 // Textures (TEXTURES, VERTEX_COLORS). `record` is a uv record's first texel in TexCoords[].

@@ -36,7 +36,7 @@ VKRAY_CONST(uint, kBindingTriangles, 5u);    // texels: Triangle[] (3 RGBA32UI e
 VKRAY_CONST(uint, kBindingPolygons, 6u);     // Polygon[]
 VKRAY_CONST(uint, kBindingPolyVertices, 7u); // vec4[] polygon vertices (xyz)
 VKRAY_CONST(uint, kBindingNormals, 8u);      // texels: shading normals, 3 per smooth triangle
-VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // texels: BvhWideNode[] (4 RGBA32UI each)
+VKRAY_CONST(uint, kBindingBvhNodes, 9u);     // texels: BvhWideNode[] (kBvhRecordTexels RGBA32UI each)
 VKRAY_CONST(uint, kBindingPrimRefs, 10u);    // texels (R32UI): leaf references, kind << 30 | index
 VKRAY_CONST(uint, kBindingImage, 11u);       // texels (RGBA32F): sum of linear RGB, samples; row-major
 VKRAY_CONST(uint, kBindingStats, 12u);       // RayStats
@@ -210,6 +210,9 @@ VKRAY_CONST(uint, kBvhLeafCountShift, 27u); // 4 bits: leaves of 1 to 16 entries
 VKRAY_CONST(uint, kBvhLeafFirstMask, 0x07FFFFFFu);
 VKRAY_CONST(uint, kBvhNoRef, 0xFFFFFFFFu); // an empty tree's root
 VKRAY_CONST(uint, kPrimPlane, 3u);         // never in the BVH; used to tag hits
+// A record's texels in kBindingBvhNodes (host/accel/bvh_records.h): both boxes, the references in
+// the low bytes of eight of their coordinates.
+VKRAY_CONST(uint, kBvhRecordTexels, 3u);
 VKRAY_CONST(uint, kBvhStackSize, 32u);     // the builder caps tree depth at this (host/accel/bvh.h)
 // Shadow entry points (host/accel/shadow_entries.h): two texels per (triangle, light) after the
 // BVH records, (start, stack 0, 1, 2) and (stack 3, 4, 5, stack height), the stack bottom first,
