@@ -126,7 +126,7 @@ BvhWideNode loadBvhNode(uint i) {
   // Three texels (host/accel/bvh_records.h): min0.xyz max0.x | max0.yz min1.xy | min1.z max1.xyz, the
   // references in the low bytes of the first eight words; each bound was rounded outwards before its
   // byte went in, so the boxes are used as they are. A fourth texel read is a call of the texel-fetch
-  // function on llvmpipe, dearer than the twenty-odd vector operations that take the bytes out.
+  // function on llvmpipe, dearer than the eighteen vector operations that take the bytes out.
   int n = int(kBvhRecordTexels * i);
   uvec4 a = imageLoad(nodeTexels, n);
   uvec4 b = imageLoad(nodeTexels, n + 1);

@@ -313,7 +313,8 @@ struct BvhNode {
 // children's boxes and references (Aila & Laine, "Understanding the Efficiency of Ray Traversal on
 // GPUs", HPG 2009), so a step tests two boxes, goes to the nearer child entered and stacks the other
 // only when both are. A reference is an interior record's index, or kBvhLeafFlag | (count - 1) <<
-// kBvhLeafCountShift | first leaf entry.
+// kBvhLeafCountShift | first leaf entry. The host's form: the kernels read it packed into
+// kBvhRecordTexels texels (host/accel/bvh_records.h) and decode it into this struct (loadBvhNode).
 struct BvhWideNode {
   vec3 min0;
   uint ref0;
