@@ -414,6 +414,12 @@ TEST(BvhBuild, WideRecordsHoldTheSameTree) {
   }
 }
 
+// How far packBvhRecords may move a bound outwards: a block of 256 ulps (2^-15 of the coordinate), or
+// up to the smallest normal at zero; 2^-14 and 2^-125 leave room for the byte on top.
+float packingSlack(float v) {
+  return std::abs(v) * 0x1p-14f + 0x1p-125f;
+}
+
 // The kernels' three-texel records (packBvhRecords): both references come back as they were, and each
 // box holds the exact one, larger by no more than the rounding the packing allows (a block of 256 ulps,
 // 2^-15 of a coordinate, or the smallest normal's neighbourhood at zero).
@@ -425,7 +431,6 @@ TEST(BvhBuild, PackedRecordsKeepTheReferencesAndHoldTheBoxes) {
     wideBvh(bvh, wide);
     std::vector<glm::uvec4> texels = packBvhRecords(wide);
     ASSERT_EQ(texels.size(), wide.size() * gpu::kBvhRecordTexels);
-    auto slack = [](float v) { return std::abs(v) * 0x1p-14f + 0x1p-125f; };
     for (std::uint32_t i = 0; i < wide.size(); ++i) {
       const gpu::BvhWideNode& w = wide[i];
       gpu::BvhWideNode p = unpackBvhRecord(texels, i);
@@ -436,10 +441,10 @@ TEST(BvhBuild, PackedRecordsKeepTheReferencesAndHoldTheBoxes) {
         ASSERT_GE(p.max0[k], w.max0[k]);
         ASSERT_LE(p.min1[k], w.min1[k]);
         ASSERT_GE(p.max1[k], w.max1[k]);
-        ASSERT_LE(w.min0[k] - p.min0[k], slack(w.min0[k]));
-        ASSERT_LE(p.max0[k] - w.max0[k], slack(w.max0[k]));
-        ASSERT_LE(w.min1[k] - p.min1[k], slack(w.min1[k]));
-        ASSERT_LE(p.max1[k] - w.max1[k], slack(w.max1[k]));
+        ASSERT_LE(w.min0[k] - p.min0[k], packingSlack(w.min0[k]));
+        ASSERT_LE(p.max0[k] - w.max0[k], packingSlack(w.max0[k]));
+        ASSERT_LE(w.min1[k] - p.min1[k], packingSlack(w.min1[k]));
+        ASSERT_LE(p.max1[k] - w.max1[k], packingSlack(w.max1[k]));
       }
     }
   }
@@ -467,8 +472,8 @@ TEST(BvhBuild, BoundsCarryingAByteStayOutsideTheValue) {
       if (v < 0.0f) {
         ASSERT_EQ(std::fpclassify(lo), FP_NORMAL) << v;
       }
-      ASSERT_LE(v - lo, std::abs(v) * 0x1p-14f + 0x1p-125f);
-      ASSERT_LE(hi - v, std::abs(v) * 0x1p-14f + 0x1p-125f);
+      ASSERT_LE(v - lo, packingSlack(v));
+      ASSERT_LE(hi - v, packingSlack(v));
     }
   }
   EXPECT_THROW(lowerBoundWithByte(2e38f, 0u), Error);

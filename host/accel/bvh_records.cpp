@@ -28,43 +28,47 @@ std::uint32_t awayFromZero(std::uint32_t bits) { // same sign, magnitude rounded
   return sign | std::max(magnitude, kSmallestNormal);
 }
 
-std::uint32_t towardsZero(std::uint32_t bits, bool positive) { // magnitude a block below, or across zero
+std::uint32_t towardsZero(std::uint32_t bits, bool crossToNegative) { // magnitude a block below, or across zero
   std::uint32_t magnitude = (bits & ~kSign) & ~kByte;
   if (magnitude >= kBlock) return (bits & kSign) | (magnitude - kBlock);
-  return positive ? kSign | kBlock : kBlock; // past zero: a tiny value of the other sign
+  return crossToNegative ? kSign | kBlock : kBlock; // past zero: a tiny value of the other sign
 }
 
 void checkRange(float v) {
   if (!(std::fabs(v) <= 1e38f)) throw Error("BVH record: box coordinate " + std::to_string(v) + " beyond ±1e38");
 }
 
+// `v` moved outwards (upwards for an upper bound, downwards for a lower one) with `byte` in its low
+// bits: away from zero where outwards is away from zero (v nonzero, of that sign), else towards it.
+std::uint32_t boundWithByte(float v, std::uint32_t byte, bool upper) {
+  checkRange(v);
+  std::uint32_t bits = std::bit_cast<std::uint32_t>(v);
+  bool nonzero = (bits & ~kSign) != 0u;
+  bool negative = (bits & kSign) != 0u;
+  bool away = nonzero && negative != upper;
+  std::uint32_t bound = away ? awayFromZero(bits) : towardsZero(bits, !upper);
+  return (bound & ~kByte) | (byte & kByte);
+}
+
 } // namespace
 
 std::uint32_t lowerBoundWithByte(float v, std::uint32_t byte) {
-  checkRange(v);
-  std::uint32_t bits = std::bit_cast<std::uint32_t>(v);
-  bool negative = (bits & kSign) != 0u && (bits & ~kSign) != 0u;
-  std::uint32_t bound = negative ? awayFromZero(bits) : towardsZero(bits, true);
-  return (bound & ~kByte) | (byte & kByte);
+  return boundWithByte(v, byte, false);
 }
 
 std::uint32_t upperBoundWithByte(float v, std::uint32_t byte) {
-  checkRange(v);
-  std::uint32_t bits = std::bit_cast<std::uint32_t>(v);
-  bool positive = (bits & kSign) == 0u && bits != 0u;
-  std::uint32_t bound = positive ? awayFromZero(bits) : towardsZero(bits, false);
-  return (bound & ~kByte) | (byte & kByte);
+  return boundWithByte(v, byte, true);
 }
 
 std::vector<glm::uvec4> packBvhRecords(const std::vector<gpu::BvhWideNode>& nodes) {
+  auto byteOf = [](std::uint32_t ref, int k) { return (ref >> (8 * k)) & kByte; };
+  auto exact = [](float v) {
+    checkRange(v);
+    return std::bit_cast<std::uint32_t>(v);
+  };
   std::vector<glm::uvec4> texels(nodes.size() * gpu::kBvhRecordTexels);
   for (std::size_t i = 0; i < nodes.size(); ++i) {
     const gpu::BvhWideNode& n = nodes[i];
-    auto byteOf = [](std::uint32_t ref, int k) { return (ref >> (8 * k)) & kByte; };
-    auto exact = [](float v) {
-      checkRange(v);
-      return std::bit_cast<std::uint32_t>(v);
-    };
     glm::uvec4* t = &texels[i * gpu::kBvhRecordTexels];
     // ref0 in the low bytes of min0.xyz and max0.x, ref1 in those of max0.yz and min1.xy.
     t[0] = glm::uvec4(lowerBoundWithByte(n.min0.x, byteOf(n.ref0, 0)), lowerBoundWithByte(n.min0.y, byteOf(n.ref0, 1)),

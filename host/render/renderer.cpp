@@ -813,8 +813,9 @@ void Renderer::writeFrameParams(const Camera& camera, const RenderSettings& s, c
   p.occluderPlaneCount = g.occluderPlanes;
   p.bvhRoot = g.bvhRoot;
   if (!g.shadowEntries.empty()) {
-    p.shadowEntryBase = static_cast<std::uint32_t>(gpu::kBvhRecordTexels * g.bvhNodes.size()); // never 0: the root has a record
-    p.shadowEntryLights = static_cast<std::uint32_t>(g.lights.size());     // two texels each
+    p.shadowEntryBase =
+        static_cast<std::uint32_t>(gpu::kBvhRecordTexels * g.bvhNodes.size()); // never 0: the root has a record
+    p.shadowEntryLights = static_cast<std::uint32_t>(g.lights.size());         // two texels each
   }
   p.triangleBoundsMin = glm::vec4(g.triangleBounds.min, 0.0f);
   p.triangleBoundsMax = glm::vec4(g.triangleBounds.max, 0.0f);

@@ -213,7 +213,7 @@ VKRAY_CONST(uint, kPrimPlane, 3u);         // never in the BVH; used to tag hits
 // A record's texels in kBindingBvhNodes (host/accel/bvh_records.h): both boxes, the references in
 // the low bytes of eight of their coordinates.
 VKRAY_CONST(uint, kBvhRecordTexels, 3u);
-VKRAY_CONST(uint, kBvhStackSize, 32u);     // the builder caps tree depth at this (host/accel/bvh.h)
+VKRAY_CONST(uint, kBvhStackSize, 32u); // the builder caps tree depth at this (host/accel/bvh.h)
 // Shadow entry points (host/accel/shadow_entries.h): two texels per (triangle, light) after the
 // BVH records, (start, stack 0, 1, 2) and (stack 3, 4, 5, stack height), the stack bottom first,
 // kBvhNoRef where unused. kEntryStackSlots bounds the stacked ones.
