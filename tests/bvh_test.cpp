@@ -845,11 +845,70 @@ bool segmentMeetsSphere(const glm::dvec3& o, const glm::dvec3& d, double tMax, c
   return glm::length(o + t * d - c) <= r;
 }
 
+// Whether the segment from o to e meets triangle v, in double: Moller-Trumbore with the segment's
+// ends left out (t in (1e-9, 1 - 1e-9)) and the triangle's edges widened by 1e-12 (a graze counts).
+bool segmentMeetsTriangle(const glm::dvec3& o, const glm::dvec3& e, const glm::dvec3 v[3]) {
+  const glm::dvec3 d = e - o, e1 = v[1] - v[0], e2 = v[2] - v[0];
+  const glm::dvec3 p = glm::cross(d, e2);
+  const double det = glm::dot(e1, p);
+  if (det == 0.0) return false; // the segment parallel to the triangle's plane
+  const glm::dvec3 s = o - v[0];
+  const double u = glm::dot(s, p) / det;
+  const glm::dvec3 q = glm::cross(s, e1);
+  const double w = glm::dot(d, q) / det;
+  const double t = glm::dot(e2, q) / det;
+  return u >= -1e-12 && w >= -1e-12 && u + w <= 1.0 + 1e-12 && t > 1e-9 && t < 1.0 - 1e-9;
+}
+
+glm::dvec3 corner(const glm::vec4& v) {
+  return glm::dvec3(glm::vec3(v));
+}
+
+// Points of triangle v that the "nothing between" checks send segments from: the centroid, points
+// near each corner and the middle of each edge, and random ones, all 1e-3 or more inside.
+std::vector<glm::dvec3> pointsOn(const glm::dvec3 v[3], std::mt19937& rng) {
+  std::vector<glm::dvec3> points;
+  auto at = [&](double a, double b, double c) { points.push_back(a * v[0] + b * v[1] + c * v[2]); };
+  at(1.0 / 3.0, 1.0 / 3.0, 1.0 / 3.0);
+  at(0.998, 0.001, 0.001), at(0.001, 0.998, 0.001), at(0.001, 0.001, 0.998);
+  at(0.4995, 0.4995, 0.001), at(0.001, 0.4995, 0.4995), at(0.4995, 0.001, 0.4995);
+  std::uniform_real_distribution<double> unit(0.001, 1.0);
+  for (int k = 0; k < 5; ++k) {
+    double a = unit(rng), b = unit(rng), c = unit(rng);
+    const double sum = a + b + c;
+    at(a / sum, b / sum, c / sum);
+  }
+  return points;
+}
+
+// A (triangle, light) marked "nothing between": no segment from a point of the triangle to the
+// light meets another triangle or a sphere, in double precision.
+void expectNothingBetween(const GpuScene& g, std::uint32_t t, const glm::dvec3& light, std::mt19937& rng) {
+  const gpu::Triangle& tri = g.triangles[t];
+  const glm::dvec3 v[3] = {corner(tri.v0), corner(tri.v1), corner(tri.v2)};
+  for (const glm::dvec3& q : pointsOn(v, rng)) {
+    for (std::uint32_t u = 0; u < g.triangles.size(); ++u) {
+      if (u == t) continue;
+      const glm::dvec3 w[3] = {corner(g.triangles[u].v0), corner(g.triangles[u].v1), corner(g.triangles[u].v2)};
+      ASSERT_FALSE(segmentMeetsTriangle(q, light, w))
+          << "triangle " << t << " is marked nothing-between, but triangle " << u << " stops a ray to the light";
+    }
+    const double dist = glm::length(light - q);
+    for (std::uint32_t s = 0; s < g.spheres.size(); ++s) {
+      const glm::vec4 cr = g.spheres[s].centerRadius;
+      ASSERT_FALSE(segmentMeetsSphere(q, (light - q) / dist, dist, glm::dvec3(glm::vec3(cr)), cr.w))
+          << "triangle " << t << " is marked nothing-between, but sphere " << s << " stops a ray to the light";
+    }
+  }
+}
+
 // Every shadow ray from a point of triangle T to light P (from on the triangle and from just off
 // either side of it, as the kernel's origins lie) that meets a triangle or sphere meets one a walk
-// from T's entry points reaches: brute force over every primitive. Lights in the hole of the
-// torus, far away, close to the surface and in a corner of the soup; subtrees shared by up to 0
-// (each triangle its own), 1, 8 and 64 leaves.
+// from T's entry points reaches: brute force over every primitive. Where the pair is marked
+// "nothing between" instead, no segment from T to P meets anything (in double; the kernel's
+// origins then never leave a walk to decide). Lights in the hole of the torus, far away, close to
+// the surface and in a corner of the soup; subtrees shared by up to 0 (each triangle its own), 1,
+// 8 and 64 leaves.
 TEST(ShadowEntries, EveryOccluderIsReachableFromTheEntryPoints) {
   struct Case {
     const char* name;
@@ -876,13 +935,20 @@ TEST(ShadowEntries, EveryOccluderIsReachableFromTheEntryPoints) {
       g.shadowEntries.clear();
       buildShadowEntries(g, options);
       ASSERT_EQ(g.shadowEntries.size(), 2 * g.triangles.size() * g.lights.size());
-      std::size_t blocked = 0, segments = 0, reached = 0;
+      std::size_t blocked = 0, segments = 0, reached = 0, nothing = 0;
       for (std::uint32_t t = 0; t < g.triangles.size(); ++t) {
         const gpu::Triangle& tri = g.triangles[t];
         const glm::dvec3 v0(glm::vec3(tri.v0)), v1(glm::vec3(tri.v1)), v2(glm::vec3(tri.v2));
         const glm::dvec3 n = glm::normalize(glm::cross(v1 - v0, v2 - v0));
         for (std::uint32_t l = 0; l < g.lights.size(); ++l) {
           const std::size_t at = 2 * (t * g.lights.size() + l);
+          if (g.shadowEntries[at + 1].w == gpu::kShadowNothingBetween) {
+            ASSERT_EQ(g.shadowEntries[at].x, gpu::kBvhNoRef);
+            ++nothing;
+            expectNothingBetween(g, t, glm::dvec3(glm::vec3(g.lights[l].position)), rng);
+            if (HasFatalFailure()) return;
+            continue;
+          }
           const auto refs = shadowEntryRefs(g.shadowEntries[at], g.shadowEntries[at + 1]);
           ASSERT_FALSE(refs.empty()) << "triangle " << t << " has no entry points";
           ASSERT_LE(refs.size(), gpu::kShadowEntryMax);
@@ -926,8 +992,13 @@ TEST(ShadowEntries, EveryOccluderIsReachableFromTheEntryPoints) {
           }
         }
       }
-      // Not vacuous: some rays are blocked, and the entry points leave much of the scene out.
+      // Not vacuous: some rays are blocked, and the entry points leave much of the scene out; on
+      // the torus a good share of the pairs has nothing between (of four lights, one in the hole).
       EXPECT_GT(blocked, segments / 20) << blocked << " of " << segments << " segments blocked";
+      EXPECT_EQ(nothing, g.shadowNothingPairs);
+      if (std::string(c.name) == "torus") {
+        EXPECT_GT(nothing, g.triangles.size() / 2) << "pairs marked nothing-between, of " << 4 * g.triangles.size();
+      }
       const double perPair = static_cast<double>(reached) / (g.triangles.size() * g.lights.size());
       const std::size_t total = g.triangles.size() + g.spheres.size() + g.polygons.size();
       // (Subtrees of 64 leaves are a large part of these small scenes.)
@@ -935,6 +1006,83 @@ TEST(ShadowEntries, EveryOccluderIsReachableFromTheEntryPoints) {
         EXPECT_LT(perPair, 0.6 * total) << "primitives reachable per (triangle, light) on average, of " << total;
     }
   }
+}
+
+// "Nothing between" on the cases that decide it: neighbours that cannot shadow (a flat floor, a
+// roof ridge, a valley the light shines into) and ones that do (a valley face the light grazes
+// below its neighbour's plane, a triangle hovering within the margin, a sphere in the way). The
+// triangles are found by their first vertex; the scene is packed around the origin.
+TEST(ShadowEntries, NothingBetweenWhereNoNeighbourCanShadow) {
+  struct Case {
+    const char* name;
+    std::vector<Tri> tris;
+    glm::dvec3 light;
+    std::vector<bool> nothing; // per triangle of `tris`
+  };
+  const Case cases[] = {
+      {"flat floor",
+       {{vec3(-1, 0, -1), vec3(-1, 0, 1), vec3(1, 0, 1)}, {vec3(1, 0, 1), vec3(1, 0, -1), vec3(-1, 0, -1)}},
+       {0.3, 5.0, 0.2},
+       {true, true}},
+      {"roof ridge",
+       {{vec3(0, 1, -1), vec3(0, 1, 1), vec3(-1, 0, 0)}, {vec3(0, 1, 1), vec3(0, 1, -1), vec3(1, 0, 0)}},
+       {0.5, 6.0, 0.1},
+       {true, true}},
+      {"valley in the light",
+       {{vec3(0, 0, -1), vec3(0, 0, 1), vec3(-1, 1, 0)}, {vec3(0, 0, 1), vec3(0, 0, -1), vec3(1, 1, 0)}},
+       {0.2, 6.0, -0.1},
+       {true, true}},
+      // The light low on the right, below the right face's plane: the left face's rays to it cross
+      // the right face.
+      {"valley grazed",
+       {{vec3(0, 0, -1), vec3(0, 0, 1), vec3(-1, 1, 0)}, {vec3(0, 0, 1), vec3(0, 0, -1), vec3(1, 1, 0)}},
+       {20.0, 3.0, 0.0},
+       {false, true}},
+      // A small triangle 1e-5 above the floor's: it shadows part of it.
+      {"hovering",
+       {{vec3(-1, 0, -1), vec3(-1, 0, 1), vec3(1, 0, 1)},
+        {vec3(-0.2f, 1e-5f, 0.3f), vec3(-0.1f, 1e-5f, 0.5f), vec3(0.1f, 1e-5f, 0.4f)}},
+       {0.0, 5.0, 0.0},
+       {false, true}},
+  };
+  // idScene's triangles alone, without its spheres and floor.
+  auto bare = [](const std::vector<Tri>& tris, const glm::dvec3& light) {
+    Scene scene = idScene(tris, true, BvhMode::On);
+    scene.spheres.clear();
+    scene.polygons.clear();
+    scene.lights = {PointLight{light, glm::dvec3(1.0), true}};
+    return scene;
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.name);
+    GpuScene g = packScene(bare(c.tris, c.light), glm::dvec3(0.0), true);
+    buildShadowEntries(g);
+    ASSERT_EQ(g.shadowEntries.size(), 2 * c.tris.size());
+    std::mt19937 rng(5);
+    for (std::size_t i = 0; i < c.tris.size(); ++i) {
+      std::uint32_t t = 0;
+      while (t < g.triangles.size() && glm::vec3(g.triangles[t].v0) != c.tris[i].v0) ++t;
+      ASSERT_LT(t, g.triangles.size());
+      const bool marked = g.shadowEntries[2 * t + 1].w == gpu::kShadowNothingBetween;
+      EXPECT_EQ(marked, c.nothing[i]) << "triangle " << i;
+      if (marked) expectNothingBetween(g, t, c.light, rng);
+    }
+  }
+  // The grazed valley's left face is shadowed by its neighbour in fact: the expectation is not
+  // only the builder's caution.
+  const glm::dvec3 right[3] = {{0, 0, 1}, {0, 0, -1}, {1, 1, 0}};
+  EXPECT_TRUE(segmentMeetsTriangle(glm::dvec3(-0.5, 0.5, 0.0), glm::dvec3(20.0, 3.0, 0.0), right));
+
+  // A sphere between a floor and its light: a primitive the builder does not clear.
+  Scene scene = bare(cases[0].tris, {0.0, 5.0, 0.0});
+  Sphere ball;
+  ball.center = {0.0, 2.0, 0.0};
+  ball.radius = 0.5;
+  ball.material = 0;
+  scene.spheres.push_back(ball);
+  GpuScene g = packScene(scene, glm::dvec3(0.0), true);
+  buildShadowEntries(g);
+  EXPECT_EQ(g.shadowNothingPairs, 0u);
 }
 
 // Scenes the table leaves alone: no BVH, no light that casts shadows, too many lights.
@@ -950,8 +1098,12 @@ TEST(ShadowEntries, BuiltOnlyWhereTheKernelCanUseThem) {
   buildShadowEntries(mixed);
   ASSERT_EQ(mixed.shadowEntries.size(), 4 * mixed.triangles.size());
   for (std::size_t t = 0; t < mixed.triangles.size(); ++t) {
-    EXPECT_NE(mixed.shadowEntries[4 * t].x, gpu::kBvhNoRef) << "triangle " << t << ", the light with shadows";
+    // Entry points, or the mark that nothing lies between the triangle and the light.
+    EXPECT_TRUE(mixed.shadowEntries[4 * t].x != gpu::kBvhNoRef ||
+                mixed.shadowEntries[4 * t + 1].w == gpu::kShadowNothingBetween)
+        << "triangle " << t << ", the light with shadows";
     EXPECT_EQ(mixed.shadowEntries[4 * t + 2].x, gpu::kBvhNoRef) << "triangle " << t << ", the light without";
+    EXPECT_EQ(mixed.shadowEntries[4 * t + 3].w, 0u) << "triangle " << t << ", the light without: from the root";
   }
   scene.lights[0].shadows = false;
   GpuScene unshadowed = packScene(scene, scene.camera.position, true);
@@ -993,6 +1145,8 @@ TEST(GpuBvh, ShadowEntryPointsCastTheSameShadows) {
     EXPECT_TRUE(renderer.gpuScene().shadowEntries.empty()) << "off builds no table";
     RenderResult b = renderer.render(scene.camera, scene.render, on);
     ASSERT_FALSE(renderer.gpuScene().shadowEntries.empty()) << "on builds the table";
+    EXPECT_GT(renderer.gpuScene().shadowNothingPairs, renderer.gpuScene().triangles.size() / 4)
+        << "on marks the pairs with nothing between, and the torus has many";
     EXPECT_TRUE(b.features.useBvh);
     test::expectNoValidationMessages();
     ASSERT_EQ(a.image.pixels.size(), b.image.pixels.size());
@@ -1015,6 +1169,43 @@ TEST(GpuBvh, ShadowEntryPointsCastTheSameShadows) {
       EXPECT_GT(shadowed, c.hits.size() / 50) << "the view must show shadows";
     }
   }
+}
+
+// Naive numerics start shadow rays on the surface and show the acne that comes of it: the kernel
+// walks the tree for the pairs marked "nothing between" there too, so the table changes nothing.
+TEST(GpuBvh, NaiveShadowRaysIgnoreNothingBetween) {
+  Renderer& renderer = test::renderer();
+  // 3000 times the usual size, so that naive hit points are off by more than their epsilon.
+  const double k = 3000.0;
+  std::vector<Tri> tris = torus(48, 24);
+  for (Tri& t : tris) t = Tri{t.v0 * float(k), t.v1 * float(k), t.v2 * float(k)};
+  Scene scene = idScene(tris, true, BvhMode::On);
+  scene.spheres.clear();
+  scene.polygons.clear();
+  scene.camera.position *= k;
+  scene.lights = {PointLight{glm::dvec3(-4.0, 3.0, 5.0) * k, glm::dvec3(0.6), true}};
+  scene.render.width = 120;
+  scene.render.height = 90;
+  scene.render.numerics = Numerics::Naive;
+  renderer.setScene(scene);
+  RenderOptions off, on;
+  off.shadowEntryPoints = ShadowEntries::Off;
+  on.shadowEntryPoints = ShadowEntries::On;
+  RenderResult a = renderer.render(scene.camera, scene.render, off);
+  RenderResult b = renderer.render(scene.camera, scene.render, on);
+  EXPECT_GT(renderer.gpuScene().shadowNothingPairs, 0u);
+  test::expectNoValidationMessages();
+  ASSERT_EQ(a.image.pixels.size(), b.image.pixels.size());
+  for (std::size_t i = 0; i < a.image.pixels.size(); ++i)
+    ASSERT_EQ(std::memcmp(&a.image.pixels[i], &b.image.pixels[i], sizeof(glm::vec3)), 0) << "pixel " << i;
+  EXPECT_EQ(a.stats.shadow, b.stats.shadow);
+  // Not vacuous: there is acne to keep, pixels the robust origins light.
+  scene.render.numerics = Numerics::Robust;
+  RenderResult robust = renderer.render(scene.camera, scene.render, off);
+  std::size_t acne = 0;
+  for (std::size_t i = 0; i < a.image.pixels.size(); ++i)
+    acne += glm::length(robust.image.pixels[i]) > glm::length(a.image.pixels[i]) + 1e-3f;
+  EXPECT_GT(acne, 10u) << "pixels lit with robust origins and dark with naive ones";
 }
 
 // Auto builds the table once the render's samples pay for it, and keeps it for the scene.

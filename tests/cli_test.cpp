@@ -119,8 +119,10 @@ TEST_F(Cli, TimeLimitPrintsItsBudget) {
   EXPECT_TRUE(fs::exists(out));
 }
 
-// --shadow-entry-points: auto builds the table only when the render's samples pay for it, on
-// always, off never; --stats says which, and the picture is the same bytes every way.
+// --shadow-entry-points: auto builds the table only when the render's samples pay for it, and
+// looks for the pairs with nothing between only when more samples pay for that; on builds both
+// always, entries the entry points alone, off nothing; --stats says which, and the picture is the
+// same bytes every way.
 TEST_F(Cli, ShadowEntryPointsSayWhetherTheyWereBuiltAndChangeNothing) {
   auto run = [&](const std::string& mode, const std::string& extra = "") {
     fs::path out = dir_ / ("s-" + mode + ".pfm");
@@ -136,16 +138,29 @@ TEST_F(Cli, ShadowEntryPointsSayWhetherTheyWereBuiltAndChangeNothing) {
   auto [offLine, off] = run("off");
   auto [autoLine, automatic] = run("auto");
   auto [manyLine, many] = run("auto", " --spp 16");
+  auto [mostLine, most] = run("auto", " --spp 64");
+  auto [entriesLine, entries] = run("entries");
   EXPECT_EQ(onLine.rfind("shadow entry points: built in ", 0), 0u) << onLine;
-  EXPECT_NE(onLine.find("(5392 triangles x 2 lights)"), std::string::npos) << onLine;
+  EXPECT_NE(onLine.find("(5392 triangles x 2 lights), nothing between in "), std::string::npos) << onLine;
+  EXPECT_NE(entriesLine.find("(5392 triangles x 2 lights), nothing between: not looked for (--shadow-entry-points "
+                             "entries)"),
+            std::string::npos)
+      << entriesLine;
   EXPECT_EQ(offLine, "shadow entry points: off (--shadow-entry-points off)");
   // 64 x 48 pixels, one sample each, for 5392 triangles: under 4 pixel samples per triangle.
   EXPECT_NE(autoLine.find("not built (too few pixel samples per triangle"), std::string::npos) << autoLine;
-  // 16 samples: 49152 pixel samples, over 4 per triangle.
+  // 16 samples: 49152 pixel samples, over 4 per triangle but under 32.
   EXPECT_EQ(manyLine.rfind("shadow entry points: built in ", 0), 0u) << manyLine;
+  EXPECT_NE(manyLine.find("nothing between: not looked for (too few pixel samples per triangle"), std::string::npos)
+      << manyLine;
+  // 64 samples: 196608, over 32 per triangle.
+  EXPECT_NE(mostLine.find(", nothing between in "), std::string::npos) << mostLine;
   EXPECT_FALSE(on.empty());
   EXPECT_EQ(on, off);
   EXPECT_EQ(on, automatic);
+  EXPECT_EQ(on, entries);
+  auto [mostEntriesLine, mostEntries] = run("entries", " --spp 64");
+  EXPECT_EQ(most, mostEntries) << "64 samples, with and without the pairs marked nothing-between";
 
   RunResult bad = vkray("render '" + scene("meshes.json") + "' -o '" + (dir_ / "bad.png").string() +
                         "' --shadow-entry-points sometimes");

@@ -60,14 +60,19 @@ double magnitude(const glm::dvec3& p) {
   return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)});
 }
 
+// What hull(T, light) is widened by: kShadowEntryMargin of the coordinates' magnitude.
+double triangleMargin(const glm::dvec3 v[3], const glm::dvec3& light) {
+  const double scale =
+      std::max({magnitude(v[0]), magnitude(v[1]), magnitude(v[2]), magnitude(light)}) + glm::length(light - v[0]);
+  return kShadowEntryMargin * scale;
+}
+
 // hull(T, light): the triangle's plane and the three faces through the light.
 Region triangleHull(const glm::dvec3 v[3], const glm::dvec3& light) {
   const glm::dvec3 points[4] = {v[0], v[1], v[2], light};
-  const double scale =
-      std::max({magnitude(v[0]), magnitude(v[1]), magnitude(v[2]), magnitude(light)}) + glm::length(light - v[0]);
   const glm::dvec3 axes[4] = {glm::cross(v[1] - v[0], v[2] - v[0]), glm::cross(v[1] - v[0], light - v[0]),
                               glm::cross(v[2] - v[1], light - v[1]), glm::cross(v[0] - v[2], light - v[2])};
-  return Region(points, 4, axes, 4, kShadowEntryMargin * scale);
+  return Region(points, 4, axes, 4, triangleMargin(v, light));
 }
 
 // A region around hull(box, light): the box of all nine points and the three axes across the
@@ -86,6 +91,11 @@ Region boxHull(const glm::vec3& bmin, const glm::vec3& bmax, const glm::dvec3& l
 }
 
 constexpr int kMaxEntries = static_cast<int>(gpu::kShadowEntryMax);
+constexpr std::size_t kBvhStackLimit = 2 * gpu::kBvhStackSize; // depth-first below seven entries
+
+// The texels of a (triangle, light) whose shadow rays nothing in the tree can stop.
+const std::array<glm::uvec4, 2> kNothing = {
+    glm::uvec4(gpu::kBvhNoRef), glm::uvec4(gpu::kBvhNoRef, gpu::kBvhNoRef, gpu::kBvhNoRef, gpu::kShadowNothingBetween)};
 
 struct Entry {
   std::uint32_t ref = gpu::kBvhNoRef;
@@ -188,6 +198,152 @@ glm::dvec3 vertex(const glm::vec4& v) {
   return glm::dvec3(glm::vec3(v));
 }
 
+// ---- Nothing between -------------------------------------------------------------------------------
+
+// Which side of the plane through `a` with normal n = cross(b - a, c - a) a point lies on, and a
+// bound on the rounding of that value. Every coordinate is a float held in a double, so the
+// computed value is within 8 epsilon of the "permanent" (the same products with every term's
+// absolute value; Shewchuk, "Adaptive Precision Floating-Point Arithmetic and Fast Robust
+// Geometric Predicates", 1997): 16 epsilon is the bound used.
+struct Plane {
+  glm::dvec3 a, n, nAbs;
+  Plane(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) : a(a) {
+    const glm::dvec3 e1 = b - a, e2 = c - a;
+    n = glm::cross(e1, e2);
+    nAbs = glm::dvec3(std::abs(e1.y * e2.z) + std::abs(e1.z * e2.y), std::abs(e1.z * e2.x) + std::abs(e1.x * e2.z),
+                      std::abs(e1.x * e2.y) + std::abs(e1.y * e2.x));
+  }
+  double value(const glm::dvec3& x) const { return glm::dot(n, x - a); }
+  double bound(const glm::dvec3& x) const { return 16.0 * 0x1p-53 * glm::dot(nAbs, glm::abs(x - a)); }
+  // +1 or -1 where the side is certain, 0 where rounding could decide it.
+  int sign(const glm::dvec3& x) const {
+    const double v = value(x);
+    return v > bound(x) ? 1 : (v < -bound(x) ? -1 : 0);
+  }
+  // Whether x lies on side `s` (+1 or -1) or on the plane, as far as rounding can tell.
+  bool onSideOrPlane(const glm::dvec3& x, int s) const { return s * value(x) >= -bound(x); }
+};
+
+// Whether triangle w (three vertices) and the tetrahedron k (four) widened by `margin` are
+// separated along some axis: the faces of both, and the cross products of their edges (with the
+// coordinate axes, which the caller has tested on w's box, the separating-axis theorem for two
+// convex polyhedra).
+bool separated(const glm::dvec3 w[3], const glm::dvec3 k[4], double margin) {
+  auto apart = [&](const glm::dvec3& axis) {
+    const double len = glm::length(axis);
+    if (!(len > 0.0) || !std::isfinite(len)) return false; // no axis: a degenerate cross product
+    double w0 = glm::dot(axis, w[0]), w1 = w0, k0 = glm::dot(axis, k[0]), k1 = k0;
+    for (int i = 1; i < 3; ++i) {
+      const double d = glm::dot(axis, w[i]);
+      w0 = std::min(w0, d);
+      w1 = std::max(w1, d);
+    }
+    for (int i = 1; i < 4; ++i) {
+      const double d = glm::dot(axis, k[i]);
+      k0 = std::min(k0, d);
+      k1 = std::max(k1, d);
+    }
+    return w1 < k0 - margin * len || w0 > k1 + margin * len;
+  };
+  const glm::dvec3 we[3] = {w[1] - w[0], w[2] - w[1], w[0] - w[2]};
+  const glm::dvec3 ke[6] = {k[1] - k[0], k[2] - k[1], k[0] - k[2], k[3] - k[0], k[3] - k[1], k[3] - k[2]};
+  if (apart(glm::cross(ke[0], -ke[2])) || apart(glm::cross(ke[0], ke[3])) || apart(glm::cross(ke[1], ke[4])) ||
+      apart(glm::cross(ke[2], ke[5])) || apart(glm::cross(we[0], we[1])))
+    return true;
+  for (const glm::dvec3& a : we)
+    for (const glm::dvec3& b : ke)
+      if (apart(glm::cross(a, b))) return true;
+  return false;
+}
+
+// Whether triangle w meets the tetrahedron k = hull(v, p) only where it shares vertices with v (a
+// mesh's neighbours of v). Both touch at a shared vertex `a`, so a plane that separates them
+// passes through it: each plane through `a` and two more of their vertices (w's plane, a face of
+// k, or one spanned by an edge of each) is tried, and it separates them when the vertices of w
+// not on it lie strictly on one side and those of k strictly on the other, as the exact
+// orientation (Plane::sign) says. Then w and k meet only in the plane, where w holds the shared
+// vertices and its spanning ones, k the shared and its own: at most the shared edge or vertex,
+// part of v itself, which no shadow ray leaving v meets again.
+bool touchesOnlyAtShared(const glm::dvec3 w[3], const glm::dvec3 k[4]) {
+  // The points: shared ones (in w and in v, k's first three), then w's own, then k's own.
+  std::array<glm::dvec3, 7> point;
+  std::array<int, 7> owner; // 0: shared, 1: w alone, 2: k alone
+  int n = 0, shared = 0;
+  bool kShared[4] = {false, false, false, false};
+  for (int i = 0; i < 3; ++i) {
+    bool isShared = false;
+    for (int j = 0; j < 3; ++j) {
+      if (w[i] == k[j]) {
+        isShared = kShared[j] = true;
+      }
+    }
+    if (isShared) {
+      point[n] = w[i];
+      owner[n++] = 0;
+      ++shared;
+    }
+  }
+  if (shared == 0) return false;
+  if (shared == 3) return true; // w is v again: it lies in v's plane, which the rays leave
+  for (int i = 0; i < 3; ++i) {
+    bool isShared = false;
+    for (int j = 0; j < 3; ++j) isShared = isShared || w[i] == k[j];
+    if (!isShared) {
+      point[n] = w[i];
+      owner[n++] = 1;
+    }
+  }
+  for (int j = 0; j < 4; ++j) {
+    if (!kShared[j]) {
+      point[n] = k[j];
+      owner[n++] = 2;
+    }
+  }
+  // Every shared point must lie in the plane, so with two shared the second spans it.
+  for (int x = 1; x < n; ++x) {
+    for (int y = x + 1; y < n; ++y) {
+      if (shared == 2 && x != 1) continue;
+      const Plane plane(point[0], point[x], point[y]);
+      int wSide = 0, kSide = 0;
+      bool apart = true;
+      for (int z = 1; z < n && apart; ++z) {
+        if (z == x || z == y) continue;
+        const int s = plane.sign(point[z]);
+        int& side = owner[z] == 1 ? wSide : kSide;
+        apart = s != 0 && owner[z] != 0 && (side == 0 || side == s);
+        side = s;
+      }
+      if (apart && wSide * kSide <= 0) return true;
+    }
+  }
+  return false;
+}
+
+// Whether triangle w can stop no shadow ray that leaves a point of triangle v for light p (the
+// segments from v's points to p, less their first point). Three ways, each enough alone:
+//  - w lies on the far side of v's plane from the light (or in it): every segment leaves that
+//    plane at its first point and stays on the light's side. A convex neighbour.
+//  - v and the light lie on the same side of w's plane (v may touch it), the light strictly:
+//    no segment crosses that plane. A concave neighbour, in a valley the light shines into.
+//  - w lies farther than `margin` from hull(v, p), which holds every segment.
+// The first two are decided exactly but for rounding below 16 epsilon of the coordinates (the
+// bounds of Plane); a point within that of a plane counts as on it. Such a sliver is eight orders
+// of magnitude below the offset of the kernel's shadow-ray origin off the surface, towards the light
+// (spawnOrigin), so a ray from that origin cannot meet what the rounding might hide.
+bool cannotStop(const glm::dvec3 w[3], const glm::dvec3 v[3], const glm::dvec3& p, const Plane& vPlane, int lightSide,
+                double margin) {
+  if (vPlane.onSideOrPlane(w[0], -lightSide) && vPlane.onSideOrPlane(w[1], -lightSide) &&
+      vPlane.onSideOrPlane(w[2], -lightSide))
+    return true;
+
+  const Plane wPlane(w[0], w[1], w[2]);
+  const int s = wPlane.sign(p);
+  if (s != 0 && wPlane.onSideOrPlane(v[0], s) && wPlane.onSideOrPlane(v[1], s) && wPlane.onSideOrPlane(v[2], s))
+    return true;
+  const glm::dvec3 k[4] = {v[0], v[1], v[2], p};
+  return touchesOnlyAtShared(w, k) || separated(w, k, margin);
+}
+
 // One light's part of the table, built top down from the root.
 struct Builder {
   const ShadowEntryInput& in;
@@ -218,6 +374,107 @@ struct Builder {
     }
   }
 
+  // Whether the ray from t's centroid to light p meets another triangle under the entries of
+  // `set`: most pairs that are not "nothing between" (a light on the inner side of a closed mesh)
+  // show it on this one ray, before nothingBetween() looks at every neighbour. Only a shortcut:
+  // an answer that is wrong either way costs time, never a shadow.
+  bool probeBlocked(std::uint32_t t, const glm::dvec3 v[3], const glm::dvec3& p, const EntrySet& set) const {
+    const glm::dvec3 o = (v[0] + v[1] + v[2]) / 3.0;
+    const glm::dvec3 d = p - o;
+    const glm::dvec3 inv = 1.0 / d; // +-inf on an axis the ray does not move along
+    auto crosses = [&](const glm::vec3& bmin, const glm::vec3& bmax) {
+      double enter = 0.0, leave = 1.0;
+      for (int i = 0; i < 3; ++i) {
+        double t0 = (double(bmin[i]) - o[i]) * inv[i], t1 = (double(bmax[i]) - o[i]) * inv[i];
+        if (std::isnan(t0) || std::isnan(t1)) return true; // on a face of the box: keep it
+        enter = std::max(enter, std::min(t0, t1));
+        leave = std::min(leave, std::max(t0, t1));
+      }
+      return enter <= leave;
+    };
+    std::array<std::uint32_t, kBvhStackLimit> stack;
+    int sp = 0;
+    for (int i = 0; i < set.n; ++i)
+      if (crosses(set.e[i].min, set.e[i].max)) stack[sp++] = set.e[i].ref;
+    while (sp > 0) {
+      const std::uint32_t ref = stack[--sp];
+      if (ref < gpu::kBvhLeafFlag) {
+        const gpu::BvhWideNode& node = in.nodes[ref];
+        if (sp + 2 > static_cast<int>(stack.size())) return false;
+        if (crosses(node.min0, node.max0)) stack[sp++] = node.ref0;
+        if (crosses(node.min1, node.max1)) stack[sp++] = node.ref1;
+        continue;
+      }
+      const std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
+      const std::uint32_t end = first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u;
+      for (std::uint32_t e = first; e < end; ++e) {
+        const std::uint32_t prim = in.primRefs[e];
+        if ((prim >> gpu::kPrimKindShift) != gpu::kPrimTriangle || (prim & gpu::kPrimIndexMask) == t) continue;
+        const gpu::Triangle& tri = in.triangles[prim & gpu::kPrimIndexMask];
+        // Moller-Trumbore in double, the segment's ends left out.
+        const glm::dvec3 a = vertex(tri.v0), e1 = vertex(tri.v1) - a, e2 = vertex(tri.v2) - a;
+        const glm::dvec3 q = glm::cross(d, e2);
+        const double det = glm::dot(e1, q);
+        if (det == 0.0) continue;
+        const glm::dvec3 s = (o - a) / det;
+        const double b1 = glm::dot(s, q);
+        const glm::dvec3 r = glm::cross(s, e1);
+        const double b2 = glm::dot(d, r);
+        const double along = glm::dot(e2, r);
+        if (b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0 && along > 1e-9 && along < 1.0) return true;
+      }
+    }
+    return false;
+  }
+
+  // Whether nothing in the tree but triangle t itself can stop a shadow ray from t to light p:
+  // every primitive under the entries of `set` (which cover hull(t, p)) whose box meets the hull
+  // is t or a triangle cannotStop() clears. Other kinds of primitive, and hulls that meet more
+  // boxes than kNothingBetweenBoxes (a triangle with a long way to its light), are not looked at
+  // further: the walk decides for them.
+  static constexpr int kNothingBetweenBoxes = 512;
+  bool nothingBetween(std::uint32_t t, const glm::dvec3 v[3], const glm::dvec3& p, const EntrySet& set) const {
+    const Plane plane(v[0], v[1], v[2]);
+    const int lightSide = plane.sign(p);
+    if (lightSide == 0) return false; // the light in the triangle's plane: no lit side
+    if (probeBlocked(t, v, p, set)) return false;
+    const double margin = triangleMargin(v, p);
+    const Region hull = triangleHull(v, p);
+    std::array<std::uint32_t, kBvhStackLimit> stack;
+    int sp = 0;
+    int boxes = 0;
+    for (int i = 0; i < set.n; ++i) {
+      ++boxes;
+      if (hull.meets(set.e[i].min, set.e[i].max)) stack[sp++] = set.e[i].ref;
+    }
+    while (sp > 0) {
+      const std::uint32_t ref = stack[--sp];
+      if (ref < gpu::kBvhLeafFlag) {
+        const gpu::BvhWideNode& node = in.nodes[ref];
+        boxes += 2;
+        if (boxes > kNothingBetweenBoxes || sp + 2 > static_cast<int>(stack.size())) return false;
+        if (hull.meets(node.min0, node.max0)) stack[sp++] = node.ref0;
+        if (hull.meets(node.min1, node.max1)) stack[sp++] = node.ref1;
+        continue;
+      }
+      const std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
+      const std::uint32_t end = first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u;
+      for (std::uint32_t e = first; e < end; ++e) {
+        const std::uint32_t prim = in.primRefs[e];
+        if ((prim >> gpu::kPrimKindShift) != gpu::kPrimTriangle) return false;
+        const std::uint32_t u = prim & gpu::kPrimIndexMask;
+        if (u == t) continue;
+        const gpu::Triangle& tri = in.triangles[u];
+        const glm::dvec3 w[3] = {vertex(tri.v0), vertex(tri.v1), vertex(tri.v2)};
+        if (!hull.meets(glm::min(glm::min(glm::vec3(tri.v0), glm::vec3(tri.v1)), glm::vec3(tri.v2)),
+                        glm::max(glm::max(glm::vec3(tri.v0), glm::vec3(tri.v1)), glm::vec3(tri.v2))))
+          continue; // its box lies beyond the widened hull
+        if (!cannotStop(w, v, p, plane, lightSide, margin)) return false;
+      }
+    }
+    return true;
+  }
+
   // `set` covers the region of the node's parent; `tasks` (the top of the tree) collects the
   // nodes at `splitDepth` instead of descending into them, for the threads.
   struct Task {
@@ -236,7 +493,11 @@ struct Builder {
     const bool leaf = ref >= gpu::kBvhLeafFlag;
     if (options.shareBelow > 0 && leafCount(ref) <= options.shareBelow) {
       const auto texels = pack(set, 0.5 * (glm::dvec3(bmin) + glm::dvec3(bmax)));
-      forTriangles(ref, [&](std::uint32_t t) { write(t, light, texels); });
+      forTriangles(ref, [&](std::uint32_t t) {
+        const gpu::Triangle& tri = in.triangles[t];
+        const glm::dvec3 v[3] = {vertex(tri.v0), vertex(tri.v1), vertex(tri.v2)};
+        write(t, light, options.nothingBetween && nothingBetween(t, v, p, set) ? kNothing : texels);
+      });
       return;
     }
     if (leaf) {
@@ -246,7 +507,9 @@ struct Builder {
         EntrySet own = set;
         refine(triangleHull(v, p), in.nodes, own,
                std::max({glm::length(v[1] - v[0]), glm::length(v[2] - v[1]), glm::length(v[0] - v[2])}));
-        write(t, light, pack(own, (v[0] + v[1] + v[2]) / 3.0));
+        write(t, light,
+              options.nothingBetween && nothingBetween(t, v, p, own) ? kNothing
+                                                                     : pack(own, (v[0] + v[1] + v[2]) / 3.0));
       });
       return;
     }

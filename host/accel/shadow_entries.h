@@ -15,6 +15,14 @@
 // leaves hands its entries to every triangle in it; with shareBelow 0 every triangle refines its
 // own for its exact hull(T, P). docs/performance.md ("Shadow entry points per triangle and light")
 // measures what each choice keeps of the saving and what it costs to build.
+//
+// Nothing between: where no primitive of the tree but T's own neighbours meets hull(T, P), and
+// none of those can stop a ray from a point of T to P (it lies behind T's plane, or T faces P
+// across its plane, or a plane through a shared vertex separates it from the hull; exact
+// orientation signs), the pair holds a mark instead of entries and the kernel skips the walk:
+// the same answer, no steps. Looking for them costs about six times the entries' build; the
+// renderer asks for them where the render's shadow rays pay for that (docs/meshes.md, "Nothing
+// between").
 #pragma once
 
 #include <cstdint>
@@ -31,6 +39,9 @@ struct ShadowEntryOptions {
   // A subtree of at most this many leaves gives all its triangles the same entries; 0: each
   // triangle its own, refined for its exact hull (the most saved on the walk, the dearest build).
   std::uint32_t shareBelow = 8;
+  // Mark the (triangle, light) pairs whose shadow rays nothing in the tree can stop, so that the
+  // kernel skips their walk (see "Nothing between" above).
+  bool nothingBetween = true;
   int threads = 0; // worker threads; 0: std::thread::hardware_concurrency()
 };
 

@@ -103,7 +103,8 @@ Scene benchScene(const MeshData& mesh, const BenchMeshesArgs& args, bool shadows
 struct Row {
   std::size_t triangles = 0;
   double buildMs = 0.0;
-  double shadowTableMs = 0.0; // the shadow entry points' table (0: not built)
+  double shadowTableMs = 0.0;   // the shadow entry points' table (0: not built)
+  std::size_t nothingPairs = 0; // its (triangle, light) pairs marked "nothing between"
   std::size_t nodes = 0;
   int depth = 0;
   double bytesPerTriangle = 0.0;
@@ -337,6 +338,7 @@ Row measureMesh(Renderer& eye, Renderer& shadow, const MeshData& mesh, const Ben
   eye.render(eyeScene.camera, eyeScene.render, query);
   RenderResult hits = shadow.render(shadowScene.camera, shadowScene.render, query);
   row.shadowTableMs = g.shadowEntryMs;
+  row.nothingPairs = g.shadowNothingPairs;
   std::vector<double> eyeMs, pairMs;
   double eyeCpu = 0.0, shadowCpu = 0.0;
   for (int i = 0; i < args.runs; ++i) {
@@ -412,7 +414,9 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
   options.cullRows = false;
   options.entryPoints = !args.noEntryPoints;
   // The table is built once per mesh, as the BVH is, and timed beside it.
-  options.shadowEntryPoints = args.noShadowEntryPoints ? ShadowEntries::Off : ShadowEntries::On;
+  options.shadowEntryPoints = args.noShadowEntryPoints ? ShadowEntries::Off
+                              : args.noNothingBetween  ? ShadowEntries::Entries
+                                                       : ShadowEntries::On;
   // Rounds are interleaved: round r of every size before round r + 1 of any, so that a slow spell
   // of a shared machine spreads over the sizes instead of landing on one.
   std::vector<MeshData> meshes;
@@ -425,7 +429,9 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
       if (args.rounds > 1) std::printf("round %d of %d, ", round, args.rounds);
       std::printf("%zu triangles: build %.1f ms, primary %.2f Mrays/s, shadow %.2f Mrays/s", row.triangles, row.buildMs,
                   row.primaryMrays(), row.shadowMrays());
-      if (row.shadowTableMs > 0) std::printf(" (shadow entry table built in %.1f ms)", row.shadowTableMs);
+      if (row.shadowTableMs > 0)
+        std::printf(" (shadow entry table built in %.1f ms, nothing between in %zu pairs)", row.shadowTableMs,
+                    row.nothingPairs);
       HostPageUse pages = shadowRenderer.sceneHostPages();
       if (pages.bytes > 0) std::printf(", huge pages %zu of %zu MiB", pages.hugeBytes >> 20, pages.bytes >> 20);
       if (embree) {

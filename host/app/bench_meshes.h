@@ -20,6 +20,7 @@ struct BenchMeshesArgs {
   bool noEmbree = false;
   bool noEntryPoints = false;       // eye rays walk from the root (RenderOptions::entryPoints)
   bool noShadowEntryPoints = false; // shadow rays walk from the root (RenderOptions::shadowEntryPoints)
+  bool noNothingBetween = false;    // the table's entry points alone (ShadowEntries::Entries)
   std::filesystem::path csv;        // also write the table here (for tools/plot-mesh-bench)
   DeviceFlags device;
 };

@@ -62,8 +62,9 @@ void addKernelFlags(CLI::App& app, KernelFlags& f) {
   app.add_flag("--no-entry-points", f.noEntryPoints,
                "walk every eye ray's BVH traversal from the root, not from its tile's entry points (for comparison)");
   app.add_option("--shadow-entry-points", f.shadowEntryPoints,
-                 "start shadow rays from triangles at their (triangle, light)'s BVH subtrees, found once per scene: "
-                 "auto (when the render's shadow rays pay for the table), on or off; the same image either way")
+                 "start shadow rays from triangles at their (triangle, light)'s BVH subtrees, found once per scene, "
+                 "and skip the walk where nothing in the BVH lies between the triangle and the light: auto (each "
+                 "when the render's shadow rays pay for it), on, entries (the subtrees alone) or off")
       ->check(CLI::IsMember(enumNameList<ShadowEntries>()));
   app.add_flag("--no-shadow-entry-points", f.noShadowEntryPoints,
                "the same as --shadow-entry-points off: every shadow ray walks the BVH from the root (for comparison)");

@@ -147,6 +147,9 @@ int main(int argc, char** argv) {
   benchMeshesCmd->add_flag("--no-shadow-entry-points", benchMeshes.noShadowEntryPoints,
                            "vkray's shadow rays walk the BVH from the root, not from their triangle's shadow entry "
                            "points");
+  benchMeshesCmd->add_flag("--no-nothing-between", benchMeshes.noNothingBetween,
+                           "vkray's shadow rays walk from their entry points also where nothing lies between their "
+                           "triangle and the light (the table's entry points alone: --shadow-entry-points entries)");
   benchMeshesCmd->add_option("--csv", benchMeshes.csv, "also write the table as CSV (tools/plot-mesh-bench)");
   addDeviceFlags(*benchMeshesCmd, benchMeshes.device);
 

@@ -252,8 +252,12 @@ void printStats(const RenderArgs& args, const Scene& scene, const vulkan::Contex
       std::printf("bytes per triangle: %.1f\n", static_cast<double>(g.meshBytes()) / g.triangles.size());
     }
     if (!g.shadowEntries.empty()) {
-      std::printf("shadow entry points: built in %.2f ms, %.1f MiB (%zu triangles x %zu lights)\n", g.shadowEntryMs,
+      std::printf("shadow entry points: built in %.2f ms, %.1f MiB (%zu triangles x %zu lights)", g.shadowEntryMs,
                   g.shadowEntries.size() * sizeof(glm::uvec4) / 1048576.0, g.triangles.size(), g.lights.size());
+      if (g.shadowNothingBetween)
+        std::printf(", nothing between in %zu pairs\n", g.shadowNothingPairs);
+      else
+        std::printf(", nothing between: %s\n", renderer.shadowNothingSkipped().c_str());
     } else if (!renderer.shadowEntriesSkipped().empty()) {
       std::printf("shadow entry points: %s\n", renderer.shadowEntriesSkipped().c_str());
     }

@@ -141,6 +141,10 @@ void buildShadowEntries(GpuScene& g, const ShadowEntryOptions& options) {
   g.shadowEntries = shadowEntryTable(
       {g.bvhNodes, g.bvhRoot, nodeBounds(g.bvh.nodes[0]), g.bvh.primRefs, g.triangles, lights, casts}, options);
   g.shadowEntryMs = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+  g.shadowNothingBetween = options.nothingBetween;
+  g.shadowNothingPairs = 0;
+  for (std::size_t i = 1; i < g.shadowEntries.size(); i += 2)
+    g.shadowNothingPairs += g.shadowEntries[i].w == gpu::kShadowNothingBetween;
 }
 
 std::size_t GpuScene::bvhBytes() const {

@@ -51,7 +51,9 @@ struct GpuScene {
   // the BVH records. Empty until Renderer::prepare builds them for a render that gains from them
   // (buildShadowEntries).
   std::vector<glm::uvec4> shadowEntries;
-  double shadowEntryMs = 0.0; // the table's build time
+  double shadowEntryMs = 0.0;         // the table's build time
+  bool shadowNothingBetween = false;  // whether the build looked for "nothing between" pairs
+  std::size_t shadowNothingPairs = 0; // the (triangle, light) pairs it marked so
 
   std::size_t bytes() const;
   std::size_t bvhBytes() const; // what the kernel reads of the BVH: the records and the references

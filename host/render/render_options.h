@@ -34,14 +34,17 @@ template <> struct EnumNames<SceneMemory> {
 };
 
 // Whether shadow rays from triangles start their BVH walk at their (triangle, light)'s shadow entry
-// points (host/accel/shadow_entries.h; the same occluders either way). Auto: when the render traces
-// enough shadow rays per (triangle, light) to pay for building the table (Renderer::prepare,
-// shadowEntriesPay; on a GPU only for the viewer); On: always (where the scene allows one); Off:
-// never.
-enum class ShadowEntries { Auto, On, Off };
+// points (host/accel/shadow_entries.h; the same occluders either way), and skip it for the pairs
+// that nothing in the BVH can shadow ("nothing between", a dearer part of the table). Auto: each
+// part when the render traces enough shadow rays per (triangle, light) to pay for it
+// (Renderer::prepare, shadowEntriesPay; on a GPU only for the viewer); On: both, always (where the
+// scene allows a table); Entries: the entry points alone; Off: never.
+enum class ShadowEntries { Auto, On, Entries, Off };
 template <> struct EnumNames<ShadowEntries> {
-  static constexpr std::array<EnumName<ShadowEntries>, 3> values{
-      {{ShadowEntries::Auto, "auto"}, {ShadowEntries::On, "on"}, {ShadowEntries::Off, "off"}}};
+  static constexpr std::array<EnumName<ShadowEntries>, 4> values{{{ShadowEntries::Auto, "auto"},
+                                                                  {ShadowEntries::On, "on"},
+                                                                  {ShadowEntries::Entries, "entries"},
+                                                                  {ShadowEntries::Off, "off"}}};
 };
 
 // Which kernel render() runs: the renderer's, or the ray queries alone (shaders/hits.comp: closest
@@ -85,7 +88,7 @@ struct RenderOptions {
   // shaders/entry.comp (the same hits; docs/performance.md, "Entry points"). Off: --no-entry-points.
   bool entryPoints = true;
   // Shadow rays from a triangle start their BVH walk at the (triangle, light)'s shadow entry points
-  // (see ShadowEntries): --shadow-entry-points auto|on|off, --no-shadow-entry-points.
+  // (see ShadowEntries): --shadow-entry-points auto|on|entries|off, --no-shadow-entry-points.
   ShadowEntries shadowEntryPoints = ShadowEntries::Auto;
   // Descent steps of the BVH walk between two subgroup votes (kSpecBvhStepsPerVote): 0 chooses by
   // the tree's depth (two from gpu::kBvhTwoStepDepth on), 1 or 2 forces it. The same hits either way.

@@ -632,46 +632,82 @@ namespace {
 // for twice that many pixel samples per triangle.
 constexpr double kPixelSamplesPerTriangle = 4.0;
 
-bool shadowEntriesPay(std::size_t triangles, double samplesPerPixel, std::uint64_t pixels) {
-  return samplesPerPixel * static_cast<double>(pixels) >= kPixelSamplesPerTriangle * static_cast<double>(triangles);
+// The "nothing between" pairs: about 0.95 µs more per (triangle, light) on both threads, and
+// they save about 100 ns per shadow ray at 100 k and 1 M triangles (2-core KVM Xeon, lavapipe Mesa
+// 25.0.7, 2026-12-07; docs/performance.md, "Nothing between"), so they pay after about ten shadow
+// rays per (triangle, light). The bench's mesh sends 0.42 shadow rays per pixel sample and breaks
+// even near 23 pixel samples per triangle, a torus covering less of the picture (0.21) near 44.
+constexpr double kPixelSamplesPerTriangleNothing = 32.0;
+
+bool shadowEntriesPay(std::size_t triangles, double samplesPerPixel, std::uint64_t pixels, double perTriangle) {
+  return samplesPerPixel * static_cast<double>(pixels) >= perTriangle * static_cast<double>(triangles);
 }
 
 } // namespace
 
 bool Renderer::prepareShadowEntries(const RenderSettings& settings, const RenderOptions& options) {
   GpuScene& g = gpuScene_;
-  if (!g.shadowEntries.empty()) return false;
+  const ShadowEntries mode = options.shadowEntryPoints;
   auto skip = [&](std::string why) {
     shadowEntriesSkipped_ = std::move(why);
     return false;
   };
-  if (options.shadowEntryPoints == ShadowEntries::Off) return skip("off (--shadow-entry-points off)");
+  if (mode == ShadowEntries::Off) return skip("off (--shadow-entry-points off)");
   if (!current_.useBvh || g.triangles.empty()) return skip("none (no triangles in a BVH)");
   if (!current_.shadows || (options.kernel != Kernel::Shade && options.kernel != Kernel::Hits))
     return skip("none (no shadow rays)");
   if (g.lights.size() > gpu::kShadowEntryLightsMax)
     return skip("none (more than " + std::to_string(gpu::kShadowEntryLightsMax) + " lights)");
-  const std::uint64_t texels = 4ull * g.bvhNodes.size() + 2ull * g.triangles.size() * g.lights.size();
+  const std::uint64_t texels = gpu::kBvhRecordTexels * g.bvhNodes.size() + 2ull * g.triangles.size() * g.lights.size();
   if (texels > context_.info().maxTexelBufferElements || texels * sizeof(glm::uvec4) > kShadowEntryBudget)
     return skip("none (the table would not fit one texel buffer)");
-  if (options.shadowEntryPoints == ShadowEntries::Auto && !options.progressive) {
-    // The viewer accumulates without end and always builds it. The rule below was measured on
-    // lavapipe; a GPU traces a shadow ray in a small fraction of the table's build time per
-    // triangle, so there only a render without end recovers it.
-    if (context_.info().type != "CPU")
-      return skip("not built (on a GPU one render's shadow rays do not pay for it; --shadow-entry-points on builds "
-                  "it)");
-    // A progressive render takes at least minSpp samples.
-    const RowWindow rows = rowWindow(settings, options);
-    const std::uint64_t pixels = static_cast<std::uint64_t>(settings.width) * (rows.end - rows.begin);
-    const double samples =
-        progressiveRender(settings, options) ? std::max(1, settings.minSpp) : std::max(1, settings.spp);
-    if (!shadowEntriesPay(g.triangles.size(), samples, pixels))
-      return skip("not built (too few pixel samples per triangle to pay for it; --shadow-entry-points on builds it)");
+  // Which parts of the table the render asks for: the entry points, and the "nothing between"
+  // pairs on top of them.
+  bool entries = true, nothing = mode == ShadowEntries::On;
+  if (mode == ShadowEntries::Auto) {
+    if (options.progressive) {
+      nothing = true; // the viewer accumulates without end and always builds both
+    } else if (context_.info().type != "CPU") {
+      // The rules below were measured on lavapipe; a GPU traces a shadow ray in a small fraction
+      // of the table's build time per triangle, so there only a render without end recovers it.
+      entries = false;
+      shadowEntriesSkipped_ =
+          "not built (on a GPU one render's shadow rays do not pay for it; --shadow-entry-points on builds it)";
+    } else {
+      // A progressive render takes at least minSpp samples.
+      const RowWindow rows = rowWindow(settings, options);
+      const std::uint64_t pixels = static_cast<std::uint64_t>(settings.width) * (rows.end - rows.begin);
+      const double samples =
+          progressiveRender(settings, options) ? std::max(1, settings.minSpp) : std::max(1, settings.spp);
+      entries = shadowEntriesPay(g.triangles.size(), samples, pixels, kPixelSamplesPerTriangle);
+      nothing = shadowEntriesPay(g.triangles.size(), samples, pixels, kPixelSamplesPerTriangleNothing);
+      if (!entries)
+        shadowEntriesSkipped_ =
+            "not built (too few pixel samples per triangle to pay for it; --shadow-entry-points on builds it)";
+      else if (!nothing)
+        shadowNothingSkipped_ = "not looked for (too few pixel samples per triangle to pay for it; "
+                                "--shadow-entry-points on looks for them)";
+    }
+  } else if (mode == ShadowEntries::Entries) {
+    shadowNothingSkipped_ = "not looked for (--shadow-entry-points entries)";
   }
-  buildShadowEntries(g);
+  if (mode == ShadowEntries::Auto && nothing && settings.numerics == Numerics::Naive) {
+    nothing = false; // the kernel walks anyway there (bvh.glsl, traverseBvh)
+    shadowNothingSkipped_ = "not looked for (naive numerics do not use them)";
+  }
+  // A table already built serves while it holds what is asked for; Auto takes a richer one as it is.
+  if (!g.shadowEntries.empty()) {
+    if (g.shadowNothingBetween == nothing || (mode == ShadowEntries::Auto && g.shadowNothingBetween)) return false;
+  } else if (!entries) {
+    return false;
+  }
+  ShadowEntryOptions build;
+  build.nothingBetween = nothing;
+  g.shadowEntries.clear();
+  buildShadowEntries(g, build);
   if (g.shadowEntries.empty()) return skip("none");
   shadowEntriesSkipped_.clear();
+  if (nothing) shadowNothingSkipped_.clear();
   sceneBuffers_.uploadBvhNodes(g);
   return true;
 }

@@ -45,6 +45,8 @@ public:
   const GpuScene& gpuScene() const { return gpuScene_; }
   // Why the scene has no shadow entry points' table (empty once it has one): `render --stats`.
   const std::string& shadowEntriesSkipped() const { return shadowEntriesSkipped_; }
+  // Why the table holds no "nothing between" pairs, where it was built without looking for them.
+  const std::string& shadowNothingSkipped() const { return shadowNothingSkipped_; }
   const Features& sceneFeatures() const { return features_; }
   HostPageUse sceneHostPages() const { return sceneBuffers_.hostPages(); }
 
@@ -145,6 +147,7 @@ private:
   // This render (or prepared viewer frame).
   Features current_;
   std::string shadowEntriesSkipped_;
+  std::string shadowNothingSkipped_;
   SceneMemoryUse memory_;
   KernelSet kernels_;
   CullScene cull_; // the frame's camera and scene, for row culling

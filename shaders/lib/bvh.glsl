@@ -138,6 +138,11 @@ void traverseBvh(TraceRay r, inout Hit hit, bool anyHit, bool fromEntryPoints, S
     if (shadowStart.a.x != kBvhNoRef) {
       ref = shadowStart.a.x;
       sp = int(shadowStart.b.w);
+    } else if (ROBUST && shadowStart.b.w == kShadowNothingBetween) {
+      // Nothing in the tree can stop a ray from this triangle to this light: no walk. Only for
+      // robust origins, which leave the surface on the light's side; naive ones sit on it and
+      // show the acne that numerics mode exists to show.
+      ref = kBvhNoRef;
     }
   }
   if (ref == kBvhNoRef) return; // an empty tree, or a tile whose frustum meets nothing

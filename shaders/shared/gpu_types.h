@@ -218,6 +218,9 @@ VKRAY_CONST(uint, kBvhStackSize, 32u); // the builder caps tree depth at this (h
 // BVH records, (start, stack 0, 1, 2) and (stack 3, 4, 5, stack height), the stack bottom first,
 // kBvhNoRef where unused. kEntryStackSlots bounds the stacked ones.
 VKRAY_CONST(uint, kShadowEntryMax, 7u);
+// A (triangle, light) whose shadow rays nothing in the BVH can stop: start kBvhNoRef and this as
+// the stack height (host/accel/shadow_entries.h, "nothing between"); the walk is skipped.
+VKRAY_CONST(uint, kShadowNothingBetween, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kShadowEntryLightsMax, 4u); // lights a scene may have for shadow entry points
 
 // Entry points (shaders/entry.comp): for each tile of kEntryTileSize x kEntryTileSize pixels (one
@@ -337,7 +340,7 @@ struct TileEntryPoints {
 // A shadow ray's entry points (kShadowEntryMax): the two texels of its (triangle, light).
 struct ShadowStart {
   uvec4 a; // x: the subtree to start at (kBvhNoRef: the root); yzw: stack words 0, 1, 2
-  uvec4 b; // xyz: stack words 3, 4, 5; w: the stack's height
+  uvec4 b; // xyz: stack words 3, 4, 5; w: the stack's height (kShadowNothingBetween: no walk)
 };
 
 #ifndef __cplusplus
