@@ -433,11 +433,12 @@ struct Builder {
   // boxes than kNothingBetweenBoxes (a triangle with a long way to its light), are not looked at
   // further: the walk decides for them.
   static constexpr int kNothingBetweenBoxes = 512;
-  bool nothingBetween(std::uint32_t t, const glm::dvec3 v[3], const glm::dvec3& p, const EntrySet& set) const {
+  bool nothingBetween(std::uint32_t t, const glm::dvec3 v[3], const glm::dvec3& p, const EntrySet& set,
+                      bool probe = true) const {
     const Plane plane(v[0], v[1], v[2]);
     const int lightSide = plane.sign(p);
     if (lightSide == 0) return false; // the light in the triangle's plane: no lit side
-    if (probeBlocked(t, v, p, set)) return false;
+    if (probe && probeBlocked(t, v, p, set)) return false;
     const double margin = triangleMargin(v, p);
     const Region hull = triangleHull(v, p);
     std::array<std::uint32_t, kBvhStackLimit> stack;
@@ -493,10 +494,12 @@ struct Builder {
     const bool leaf = ref >= gpu::kBvhLeafFlag;
     if (options.shareBelow > 0 && leafCount(ref) <= options.shareBelow) {
       const auto texels = pack(set, 0.5 * (glm::dvec3(bmin) + glm::dvec3(bmax)));
+      bool lastMarked = false; // the subtree's triangles are neighbours: after a mark, skip the probe
       forTriangles(ref, [&](std::uint32_t t) {
         const gpu::Triangle& tri = in.triangles[t];
         const glm::dvec3 v[3] = {vertex(tri.v0), vertex(tri.v1), vertex(tri.v2)};
-        write(t, light, options.nothingBetween && nothingBetween(t, v, p, set) ? kNothing : texels);
+        lastMarked = options.nothingBetween && nothingBetween(t, v, p, set, !lastMarked);
+        write(t, light, lastMarked ? kNothing : texels);
       });
       return;
     }
