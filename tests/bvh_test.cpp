@@ -1251,12 +1251,40 @@ TEST(GpuBvh, ShadowEntryPointsAreBuiltWhenTheyPay) {
   EXPECT_TRUE(renderer.gpuScene().shadowEntries.empty());
   EXPECT_NE(renderer.shadowEntriesSkipped().find("too few pixel samples"), std::string::npos)
       << renderer.shadowEntriesSkipped();
-  scene.render.spp = 64;
-  RenderResult many = renderer.render(scene.camera, scene.render, automatic);
+  // 8 x 1728 pixel samples: 6 per triangle, enough for the entry points (4), not for the marks (32).
+  scene.render.spp = 8;
+  renderer.render(scene.camera, scene.render, automatic);
   EXPECT_FALSE(renderer.gpuScene().shadowEntries.empty()) << renderer.shadowEntriesSkipped();
+  EXPECT_FALSE(renderer.gpuScene().shadowNothingBetween);
+  EXPECT_NE(renderer.shadowNothingSkipped().find("too few pixel samples"), std::string::npos)
+      << renderer.shadowNothingSkipped();
+  // 64 x 1728: 48 per triangle, and the table is built again with the marks.
+  scene.render.spp = 64;
+  renderer.render(scene.camera, scene.render, automatic);
+  EXPECT_TRUE(renderer.gpuScene().shadowNothingBetween);
+  EXPECT_GT(renderer.gpuScene().shadowNothingPairs, 0u);
   scene.render.spp = 1;
   RenderResult again = renderer.render(scene.camera, scene.render, automatic);
   EXPECT_FALSE(renderer.gpuScene().shadowEntries.empty()) << "kept for the scene";
+  EXPECT_TRUE(renderer.gpuScene().shadowNothingBetween) << "kept for the scene";
+  // The viewer accumulates without end: both parts at its first frame, for a mesh whose marks
+  // take a small part of a second.
+  renderer.setScene(scene);
+  RenderOptions viewer = automatic;
+  viewer.progressive = true;
+  renderer.prepare(scene.camera, scene.render, viewer);
+  EXPECT_TRUE(renderer.gpuScene().shadowNothingBetween) << renderer.shadowNothingSkipped();
+  EXPECT_GT(renderer.gpuScene().shadowNothingPairs, 0u);
+  // Over 250 000 pairs the viewer's first frame does not wait for the marks.
+  Scene large = idScene(torus(361, 360), true, BvhMode::On); // 259 920 triangles, one light
+  large.render.width = 48;
+  large.render.height = 36;
+  renderer.setScene(large);
+  renderer.prepare(large.camera, large.render, viewer);
+  EXPECT_FALSE(renderer.gpuScene().shadowEntries.empty()) << renderer.shadowEntriesSkipped();
+  EXPECT_FALSE(renderer.gpuScene().shadowNothingBetween);
+  EXPECT_NE(renderer.shadowNothingSkipped().find("would hold up the first frame"), std::string::npos)
+      << renderer.shadowNothingSkipped();
   test::expectNoValidationMessages();
   for (std::size_t i = 0; i < one.image.pixels.size(); ++i) {
     ASSERT_EQ(std::memcmp(&one.image.pixels[i], &again.image.pixels[i], sizeof(glm::vec3)), 0) << "pixel " << i;

@@ -639,6 +639,12 @@ constexpr double kPixelSamplesPerTriangle = 4.0;
 // even near 23 pixel samples per triangle, a torus covering less of the picture (0.21) near 44.
 constexpr double kPixelSamplesPerTriangleNothing = 32.0;
 
+// The viewer accumulates without end, so the marks pay for themselves there sooner or later, but
+// they are built before its first frame: it looks for them while that costs at most about a
+// quarter of a second (about 1 µs per pair), so that a large mesh's first image does not wait
+// for them (1 M triangles under one light: about 1 s).
+constexpr std::size_t kViewerNothingPairs = 250000;
+
 bool shadowEntriesPay(std::size_t triangles, double samplesPerPixel, std::uint64_t pixels, double perTriangle) {
   return samplesPerPixel * static_cast<double>(pixels) >= perTriangle * static_cast<double>(triangles);
 }
@@ -666,7 +672,12 @@ bool Renderer::prepareShadowEntries(const RenderSettings& settings, const Render
   bool entries = true, nothing = mode == ShadowEntries::On;
   if (mode == ShadowEntries::Auto) {
     if (options.progressive) {
-      nothing = true; // the viewer accumulates without end and always builds both
+      // The viewer accumulates without end and builds the entry points at its first frame, and
+      // the marks too unless they would hold up that frame.
+      nothing = g.triangles.size() * g.lights.size() <= kViewerNothingPairs;
+      if (!nothing)
+        shadowNothingSkipped_ = "not looked for (over " + std::to_string(kViewerNothingPairs) +
+                                " pairs: they would hold up the first frame; --shadow-entry-points on looks for them)";
     } else if (context_.info().type != "CPU") {
       // The rules below were measured on lavapipe; a GPU traces a shadow ray in a small fraction
       // of the table's build time per triangle, so there only a render without end recovers it.
