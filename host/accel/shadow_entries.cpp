@@ -5,7 +5,9 @@
 #include <array>
 #include <atomic>
 #include <cmath>
+#include <limits>
 #include <thread>
+#include <utility>
 
 namespace vkray {
 namespace {
@@ -269,15 +271,12 @@ bool touchesOnlyAtShared(const glm::dvec3 w[3], const glm::dvec3 k[4]) {
   std::array<glm::dvec3, 7> point;
   std::array<int, 7> owner; // 0: shared, 1: w alone, 2: k alone
   int n = 0, shared = 0;
-  bool kShared[4] = {false, false, false, false};
+  bool wShared[3] = {false, false, false}, kShared[4] = {false, false, false, false};
   for (int i = 0; i < 3; ++i) {
-    bool isShared = false;
     for (int j = 0; j < 3; ++j) {
-      if (w[i] == k[j]) {
-        isShared = kShared[j] = true;
-      }
+      if (w[i] == k[j]) wShared[i] = kShared[j] = true;
     }
-    if (isShared) {
+    if (wShared[i]) {
       point[n] = w[i];
       owner[n++] = 0;
       ++shared;
@@ -286,9 +285,7 @@ bool touchesOnlyAtShared(const glm::dvec3 w[3], const glm::dvec3 k[4]) {
   if (shared == 0) return false;
   if (shared == 3) return true; // w is v again: it lies in v's plane, which the rays leave
   for (int i = 0; i < 3; ++i) {
-    bool isShared = false;
-    for (int j = 0; j < 3; ++j) isShared = isShared || w[i] == k[j];
-    if (!isShared) {
+    if (!wShared[i]) {
       point[n] = w[i];
       owner[n++] = 1;
     }
@@ -359,6 +356,12 @@ struct Builder {
     table[at + 1] = texels[1];
   }
 
+  // The leaf entries [first, end) of a leaf reference (bvh.glsl's leafEntries).
+  static std::pair<std::uint32_t, std::uint32_t> leafEntries(std::uint32_t ref) {
+    const std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
+    return {first, first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u};
+  }
+
   // Calls f(triangle index) for every triangle under `ref`.
   template <typename F> void forTriangles(std::uint32_t ref, F&& f) const {
     if (ref < gpu::kBvhLeafFlag) {
@@ -366,18 +369,47 @@ struct Builder {
       forTriangles(in.nodes[ref].ref1, f);
       return;
     }
-    const std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
-    const std::uint32_t end = first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u;
+    const auto [first, end] = leafEntries(ref);
     for (std::uint32_t k = first; k < end; ++k) {
       const std::uint32_t prim = in.primRefs[k];
       if ((prim >> gpu::kPrimKindShift) == gpu::kPrimTriangle) f(prim & gpu::kPrimIndexMask);
     }
   }
 
+  // Walks the subtrees of `set` depth first into every box `meets` keeps, and calls visit(leaf
+  // entry) for each primitive reached. True when the walk is complete; false as soon as `visit`
+  // returns false, or once it has tested more than `maxBoxes` boxes (or would overflow its stack).
+  template <typename Meets, typename Visit>
+  bool walk(const EntrySet& set, Meets&& meets, Visit&& visit, int maxBoxes) const {
+    std::array<std::uint32_t, kBvhStackLimit> stack;
+    int sp = 0;
+    int boxes = 0;
+    for (int i = 0; i < set.n; ++i) {
+      ++boxes;
+      if (meets(set.e[i].min, set.e[i].max)) stack[sp++] = set.e[i].ref;
+    }
+    while (sp > 0) {
+      const std::uint32_t ref = stack[--sp];
+      if (ref < gpu::kBvhLeafFlag) {
+        const gpu::BvhWideNode& node = in.nodes[ref];
+        boxes += 2;
+        if (boxes > maxBoxes || sp + 2 > static_cast<int>(stack.size())) return false;
+        if (meets(node.min0, node.max0)) stack[sp++] = node.ref0;
+        if (meets(node.min1, node.max1)) stack[sp++] = node.ref1;
+        continue;
+      }
+      const auto [first, end] = leafEntries(ref);
+      for (std::uint32_t e = first; e < end; ++e)
+        if (!visit(in.primRefs[e])) return false;
+    }
+    return true;
+  }
+
   // Whether the ray from t's centroid to light p meets another triangle under the entries of
   // `set`: most pairs that are not "nothing between" (a light on the inner side of a closed mesh)
   // show it on this one ray, before nothingBetween() looks at every neighbour. Only a shortcut:
-  // an answer that is wrong either way costs time, never a shadow.
+  // an answer that is wrong either way costs time, never a shadow (a walk cut short counts as
+  // blocked).
   bool probeBlocked(std::uint32_t t, const glm::dvec3 v[3], const glm::dvec3& p, const EntrySet& set) const {
     const glm::dvec3 o = (v[0] + v[1] + v[2]) / 3.0;
     const glm::dvec3 d = p - o;
@@ -392,39 +424,22 @@ struct Builder {
       }
       return enter <= leave;
     };
-    std::array<std::uint32_t, kBvhStackLimit> stack;
-    int sp = 0;
-    for (int i = 0; i < set.n; ++i)
-      if (crosses(set.e[i].min, set.e[i].max)) stack[sp++] = set.e[i].ref;
-    while (sp > 0) {
-      const std::uint32_t ref = stack[--sp];
-      if (ref < gpu::kBvhLeafFlag) {
-        const gpu::BvhWideNode& node = in.nodes[ref];
-        if (sp + 2 > static_cast<int>(stack.size())) return false;
-        if (crosses(node.min0, node.max0)) stack[sp++] = node.ref0;
-        if (crosses(node.min1, node.max1)) stack[sp++] = node.ref1;
-        continue;
-      }
-      const std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
-      const std::uint32_t end = first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u;
-      for (std::uint32_t e = first; e < end; ++e) {
-        const std::uint32_t prim = in.primRefs[e];
-        if ((prim >> gpu::kPrimKindShift) != gpu::kPrimTriangle || (prim & gpu::kPrimIndexMask) == t) continue;
-        const gpu::Triangle& tri = in.triangles[prim & gpu::kPrimIndexMask];
-        // Moller-Trumbore in double, the segment's ends left out.
-        const glm::dvec3 a = vertex(tri.v0), e1 = vertex(tri.v1) - a, e2 = vertex(tri.v2) - a;
-        const glm::dvec3 q = glm::cross(d, e2);
-        const double det = glm::dot(e1, q);
-        if (det == 0.0) continue;
-        const glm::dvec3 s = (o - a) / det;
-        const double b1 = glm::dot(s, q);
-        const glm::dvec3 r = glm::cross(s, e1);
-        const double b2 = glm::dot(d, r);
-        const double along = glm::dot(e2, r);
-        if (b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0 && along > 1e-9 && along < 1.0) return true;
-      }
-    }
-    return false;
+    // Moller-Trumbore in double, the segment's ends left out: true where the ray misses.
+    auto misses = [&](std::uint32_t prim) {
+      if ((prim >> gpu::kPrimKindShift) != gpu::kPrimTriangle || (prim & gpu::kPrimIndexMask) == t) return true;
+      const gpu::Triangle& tri = in.triangles[prim & gpu::kPrimIndexMask];
+      const glm::dvec3 a = vertex(tri.v0), e1 = vertex(tri.v1) - a, e2 = vertex(tri.v2) - a;
+      const glm::dvec3 q = glm::cross(d, e2);
+      const double det = glm::dot(e1, q);
+      if (det == 0.0) return true;
+      const glm::dvec3 s = (o - a) / det;
+      const double b1 = glm::dot(s, q);
+      const glm::dvec3 r = glm::cross(s, e1);
+      const double b2 = glm::dot(d, r);
+      const double along = glm::dot(e2, r);
+      return !(b1 >= 0.0 && b2 >= 0.0 && b1 + b2 <= 1.0 && along > 1e-9 && along < 1.0);
+    };
+    return !walk(set, crosses, misses, std::numeric_limits<int>::max());
   }
 
   // Whether nothing in the tree but triangle t itself can stop a shadow ray from t to light p:
@@ -441,39 +456,19 @@ struct Builder {
     if (probe && probeBlocked(t, v, p, set)) return false;
     const double margin = triangleMargin(v, p);
     const Region hull = triangleHull(v, p);
-    std::array<std::uint32_t, kBvhStackLimit> stack;
-    int sp = 0;
-    int boxes = 0;
-    for (int i = 0; i < set.n; ++i) {
-      ++boxes;
-      if (hull.meets(set.e[i].min, set.e[i].max)) stack[sp++] = set.e[i].ref;
-    }
-    while (sp > 0) {
-      const std::uint32_t ref = stack[--sp];
-      if (ref < gpu::kBvhLeafFlag) {
-        const gpu::BvhWideNode& node = in.nodes[ref];
-        boxes += 2;
-        if (boxes > kNothingBetweenBoxes || sp + 2 > static_cast<int>(stack.size())) return false;
-        if (hull.meets(node.min0, node.max0)) stack[sp++] = node.ref0;
-        if (hull.meets(node.min1, node.max1)) stack[sp++] = node.ref1;
-        continue;
-      }
-      const std::uint32_t first = ref & gpu::kBvhLeafFirstMask;
-      const std::uint32_t end = first + ((ref >> gpu::kBvhLeafCountShift) & 15u) + 1u;
-      for (std::uint32_t e = first; e < end; ++e) {
-        const std::uint32_t prim = in.primRefs[e];
-        if ((prim >> gpu::kPrimKindShift) != gpu::kPrimTriangle) return false;
-        const std::uint32_t u = prim & gpu::kPrimIndexMask;
-        if (u == t) continue;
-        const gpu::Triangle& tri = in.triangles[u];
-        const glm::dvec3 w[3] = {vertex(tri.v0), vertex(tri.v1), vertex(tri.v2)};
-        if (!hull.meets(glm::min(glm::min(glm::vec3(tri.v0), glm::vec3(tri.v1)), glm::vec3(tri.v2)),
-                        glm::max(glm::max(glm::vec3(tri.v0), glm::vec3(tri.v1)), glm::vec3(tri.v2))))
-          continue; // its box lies beyond the widened hull
-        if (!cannotStop(w, v, p, plane, lightSide, margin)) return false;
-      }
-    }
-    return true;
+    auto meets = [&](const glm::vec3& bmin, const glm::vec3& bmax) { return hull.meets(bmin, bmax); };
+    auto cleared = [&](std::uint32_t prim) {
+      if ((prim >> gpu::kPrimKindShift) != gpu::kPrimTriangle) return false;
+      const std::uint32_t u = prim & gpu::kPrimIndexMask;
+      if (u == t) return true;
+      const gpu::Triangle& tri = in.triangles[u];
+      const glm::vec3 a(tri.v0), b(tri.v1), c(tri.v2);
+      if (!hull.meets(glm::min(glm::min(a, b), c), glm::max(glm::max(a, b), c)))
+        return true; // its box lies beyond the widened hull
+      const glm::dvec3 w[3] = {glm::dvec3(a), glm::dvec3(b), glm::dvec3(c)};
+      return cannotStop(w, v, p, plane, lightSide, margin);
+    };
+    return walk(set, meets, cleared, kNothingBetweenBoxes);
   }
 
   // `set` covers the region of the node's parent; `tasks` (the top of the tree) collects the
