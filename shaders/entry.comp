@@ -44,6 +44,23 @@ bool boxInFrustum(vec3 bmin, vec3 bmax) {
   return inside;
 }
 
+// The search's two short lists live in registers: each is read and written only through these,
+// whose loops unroll into constant indices, so every slot is a register of its own and a write is
+// a select per slot. Indexed by the lane's own count they would be private arrays, which llvmpipe
+// writes and reads lane by lane with a branch per lane: the pass took a tenth of the eye rays' time
+// at 1 k triangles (docs/performance.md, "Entry points").
+#define ENTRY_LIST uint[kEntryPointsMax]
+
+void listPut(inout ENTRY_LIST list, int i, uint value) {
+  for (int k = 0; k < int(kEntryPointsMax); ++k) list[k] = k == i ? value : list[k];
+}
+
+uint listGet(ENTRY_LIST list, int i) {
+  uint value = kBvhNoRef;
+  for (int k = 0; k < int(kEntryPointsMax); ++k) value = k == i ? list[k] : value;
+  return value;
+}
+
 float boxDistance2(vec3 bmin, vec3 bmax) {
   vec3 d = clamp(gEye, bmin, bmax) - gEye;
   return dot(d, d);
@@ -99,15 +116,19 @@ void main() {
   }
 
   uint found[kEntryPointsMax];
-  int count = 0;
   uint pending[kEntryPointsMax];
+  for (int k = 0; k < int(kEntryPointsMax); ++k) {
+    found[k] = kBvhNoRef;
+    pending[k] = kBvhNoRef;
+  }
+  int count = 0;
   int top = 0;
   uint root = opaqueUniform(frame.bvhRoot);
-  if (root != kBvhNoRef) pending[top++] = root;
+  if (root != kBvhNoRef) listPut(pending, top++, root);
   // Invariant: count + top <= kEntryPointsMax. The loop is tested at the bottom (bvh.glsl).
   if (top > 0) {
     while (true) {
-      uint ref = pending[--top];
+      uint ref = listGet(pending, --top);
       bool expanded = false;
       if (ref < kBvhLeafFlag) {
         BvhWideNode node = loadBvhNode(ref);
@@ -119,25 +140,20 @@ void main() {
         bool leafChild = (in0 && node.ref0 >= kBvhLeafFlag) || (in1 && node.ref1 >= kBvhLeafFlag);
         if (!leafChild && count + top + children <= int(kEntryPointsMax)) {
           expanded = true;
-          if (in0 && in1) {
-            bool firstNearer = boxDistance2(node.min0, node.max0) <= boxDistance2(node.min1, node.max1);
-            pending[top++] = firstNearer ? node.ref1 : node.ref0; // the farther waits below the nearer
-            pending[top++] = firstNearer ? node.ref0 : node.ref1;
-          } else if (in0) {
-            pending[top++] = node.ref0;
-          } else if (in1) {
-            pending[top++] = node.ref1;
-          }
+          // The farther child waits below the nearer; a lone child is the nearer.
+          bool firstNearer = !in1 || (in0 && boxDistance2(node.min0, node.max0) <= boxDistance2(node.min1, node.max1));
+          if (in0 && in1) listPut(pending, top++, firstNearer ? node.ref1 : node.ref0);
+          if (children > 0) listPut(pending, top++, firstNearer ? node.ref0 : node.ref1);
         }
       }
-      if (!expanded) found[count++] = ref;
+      if (!expanded) listPut(found, count++, ref);
       if (top == 0) break;
     }
   }
 
   // found[0] is where an eye ray starts; the rest wait on its stack, the farthest at the bottom.
   uint words[8];
-  for (int k = 0; k < 6; ++k) words[k] = k < count - 1 ? found[max(count - 1 - k, 0)] : kBvhNoRef;
+  for (int k = 0; k < 6; ++k) words[k] = k < count - 1 ? listGet(found, count - 1 - k) : kBvhNoRef;
   words[6] = count > 0 ? found[0] : kBvhNoRef;
   words[7] = uint(max(count - 1, 0));
   entryPoints[2u * tile] = uvec4(words[0], words[1], words[2], words[3]);
