@@ -1003,8 +1003,9 @@ TEST(ShadowEntries, EveryOccluderIsReachableFromTheEntryPoints) {
       const double perPair = static_cast<double>(reached) / (g.triangles.size() * g.lights.size());
       const std::size_t total = g.triangles.size() + g.spheres.size() + g.polygons.size();
       // (Subtrees of 64 leaves are a large part of these small scenes.)
-      if (c.local && share <= 8)
+      if (c.local && share <= 8) {
         EXPECT_LT(perPair, 0.6 * total) << "primitives reachable per (triangle, light) on average, of " << total;
+      }
     }
   }
 }
@@ -1092,8 +1093,8 @@ TEST(ShadowEntries, NothingBetweenWhereNoNeighbourCanShadow) {
 // welded or not, smooth or faceted; a mark must hold on each.
 TEST(ShadowEntries, NothingBetweenHoldsOnRealMeshes) {
   const std::string models = "/usr/share/assimp/models/";
-  for (const std::string file : {test::scenePath("meshes.json"), test::scenePath("textured.json"),
-                                 models + "OBJ/spider.obj", models + "PLY/Wuson.ply", models + "OBJ/regr01.obj"}) {
+  for (const std::string& file : {test::scenePath("meshes.json"), test::scenePath("textured.json"),
+                                  models + "OBJ/spider.obj", models + "PLY/Wuson.ply", models + "OBJ/regr01.obj"}) {
     SCOPED_TRACE(file);
     Scene scene = loadScene(file);
     GpuScene g = packScene(scene, scene.camera.position, true);
