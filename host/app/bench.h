@@ -1,6 +1,7 @@
 // Benchmark helpers shared by the `vkray bench` subcommands.
 #pragma once
 
+#include <algorithm>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -28,7 +29,12 @@ struct TimedRender {
   Image image;
 };
 
-double median(std::vector<double> v);
+inline double median(std::vector<double> v) {
+  if (v.empty()) return 0.0;
+  std::sort(v.begin(), v.end());
+  std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
 
 // The image scaled to `height` rows, its aspect kept (at least one pixel wide).
 void scaleToHeight(RenderSettings& settings, std::uint32_t height);

@@ -11,13 +11,6 @@
 
 namespace vkray {
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
 TimedRender timeRender(Renderer& renderer, const Scene& scene, const RenderSettings& settings,
                        const RenderOptions& options, int warmup, int runs) {
   TimedRender out;

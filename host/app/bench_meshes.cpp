@@ -354,10 +354,7 @@ Row measureMesh(Renderer& eye, Renderer& shadow, const MeshData& mesh, const Ben
   }
   row.primaryMs = median(eyeMs);
   row.primaryCpuMs = eyeCpu / args.runs;
-  // The pairs' differences spread by about a millisecond; where the shadow rays cost less than
-  // that (the 1 k mesh with its "nothing between" marks), the median can come out at or below
-  // zero, and then the time is not resolved: 0, and the line says so.
-  row.shadowMs = std::max(0.0, median(pairMs));
+  row.shadowMs = resolvedShadowMs(eyeMs, pairMs); // 0, and the line says so, where it is noise
   row.shadowCpuMs = std::max(1e-3, shadowCpu / args.runs);
   for (const glm::vec4& h : hits.hits) {
     row.shadowRays += h.w >= 0.0f;
@@ -435,7 +432,7 @@ int runBenchMeshes(const BenchMeshesArgs& args) {
       if (row.shadowMs > 0)
         std::printf("shadow %.2f Mrays/s", row.shadowMrays());
       else
-        std::printf("shadow below the timer's noise (0 in the tables)");
+        std::printf("shadow below the runs' noise (0 in the tables)");
       if (row.shadowTableMs > 0)
         std::printf(" (shadow entry table built in %.1f ms, nothing between in %zu pairs)", row.shadowTableMs,
                     row.nothingPairs);
