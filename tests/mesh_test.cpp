@@ -591,8 +591,8 @@ TEST(CliMesh, BenchRoundsAreInterleavedAndSummarised) {
 }
 
 // The shadow rays' time is the median of the pairs' differences where it stands above the
-// eye-only runs' spread, and 0 (printed as "below the runs' noise") where it does not: the 1 k mesh
-// with its "nothing between" marks, or a small image, once printed 340 Mrays/s from one run.
+// eye-only runs' spread, and 0 (printed as "below the runs' noise") where it does not: one run of
+// the 10 k mesh at 160 x 120, its shadow rays mostly marked "nothing between", printed 340 Mrays/s.
 TEST(BenchMeshes, ShadowTimeWithinTheRunsNoiseIsNotResolved) {
   // Eye-only runs 10 ± 0.5 ms: half their range is 0.5 ms.
   const std::vector<double> eye = {9.5, 10.0, 10.5, 10.2, 9.8};
