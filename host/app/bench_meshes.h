@@ -36,7 +36,6 @@ int runBenchMeshes(const BenchMeshesArgs& args);
 // between" marks, or a small image) the median says nothing about them. With one or two runs there
 // is no spread to judge by. (Inline: the tests check it without the bench's Embree side.)
 inline double resolvedShadowMs(const std::vector<double>& eyeMs, const std::vector<double>& pairMs) {
-  if (pairMs.empty()) return 0.0;
   double noise = 0.0;
   if (eyeMs.size() >= 3) {
     auto [least, largest] = std::minmax_element(eyeMs.begin(), eyeMs.end());
