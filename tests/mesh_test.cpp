@@ -167,6 +167,29 @@ TEST(MeshImport, PolygonsBecomeFansAndDegenerateTrianglesAreDroppedAndCounted) {
   expectNear(scene.triangles[3].v[0], {0, 0, 1});
 }
 
+// Skinning weights ("vw" lines) are not used, and tinyobjloader converts their joint ids to int
+// unchecked (undefined for 1e42, a fuzz finding), so they are screened out before it reads the
+// file. The screen ends lines where tinyobjloader does, at a lone CR too, so a bad position after
+// one is still refused.
+TEST(MeshImport, VertexWeightLinesAreIgnoredAndLoneCarriageReturnsEndLines) {
+  const fs::path dir = test::scratchDir("mesh-test-weights");
+  const fs::path weights = dir / "weights.obj";
+  std::ofstream(weights, std::ios::binary) << "v 0 0 0\nv 1 0 0\nv 0 1 0\nvw 0 1e42 0.5\n  vw\t1 2 0.5\nf 1 2 3\n";
+  Scene scene = loadMeshScene(meshObject(weights.string()));
+  ASSERT_EQ(scene.triangles.size(), 1u);
+  expectNear(scene.triangles[0].v[1], {1, 0, 0});
+
+  const fs::path cr = dir / "cr.obj";
+  std::ofstream(cr, std::ios::binary) << "v 0 0 0\rv nan 0 0\rv 0 1 0\rf 1 2 3\r";
+  try {
+    loadMeshScene(meshObject(cr.string()));
+    ADD_FAILURE() << "a NaN position after a lone CR was read";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("vertex 2 (v line 2) is not finite (NaN or Inf)"), std::string::npos)
+        << e.what();
+  }
+}
+
 // box-ascii.ply and box-binary.ply (big endian, with an element vkray skips) hold box.obj's box:
 // the same triangles, in the same order, all of one (the default) material.
 TEST(MeshImport, PlyBoxesAreTheObjBox) {

@@ -42,16 +42,24 @@ std::string firstLine(const std::string& s) {
   return line;
 }
 
-// tinyobjloader reads a coordinate it cannot parse ("nan", "inf", "abc") as 0, silently. The
-// position lines are checked here first, so such a vertex is refused instead of moved to 0.
-void checkPositionLines(const std::string& text, const std::string& where) {
+// The lines tinyobjloader would read unsafely, screened before it sees them:
+//  - it reads a coordinate it cannot parse ("nan", "inf", "abc") as 0, silently, so position lines
+//    are checked here and such a vertex is refused instead of moved to 0;
+//  - it converts a vertex weight's joint id ("vw" lines, skinning data vkray does not use) to int
+//    unchecked, undefined behaviour for 1e42 (a fuzz finding), so those lines become comments,
+//    which keeps every other line where it was.
+void screenLines(std::string& text, const std::string& where) {
   std::size_t vertex = 0;
   std::size_t pos = 0;
   while (pos < text.size()) {
-    std::size_t end = text.find('\n', pos);
+    // Lines end where tinyobjloader ends them: at \n, \r\n or a lone \r.
+    std::size_t end = text.find_first_of("\r\n", pos);
     if (end == std::string::npos) end = text.size();
     std::size_t i = text.find_first_not_of(" \t", pos);
-    if (i != std::string::npos && i + 1 < end && text[i] == 'v' && (text[i + 1] == ' ' || text[i + 1] == '\t')) {
+    if (i != std::string::npos && i + 2 < end && text[i] == 'v' && text[i + 1] == 'w' &&
+        (text[i + 2] == ' ' || text[i + 2] == '\t')) {
+      text[i] = '#';
+    } else if (i != std::string::npos && i + 1 < end && text[i] == 'v' && (text[i + 1] == ' ' || text[i + 1] == '\t')) {
       ++vertex;
       i += 2;
       for (int k = 0; k < 3; ++k) {
@@ -111,7 +119,7 @@ MeshData readObj(const MeshRequest& request) {
   std::ifstream file(request.file, std::ios::binary);
   if (!file) throw InputError(where, "cannot open for reading");
   std::string text((std::istreambuf_iterator<char>(file)), std::istreambuf_iterator<char>());
-  checkPositionLines(text, where);
+  screenLines(text, where);
   std::istringstream in(std::move(text));
   tinyobj::attrib_t attrib;
   std::vector<tinyobj::shape_t> shapes;
