@@ -9,6 +9,7 @@
 
 #include <gtest/gtest.h>
 
+#include "reference.h"
 #include "render/kernel_variants.h"
 #include "scene/features.h"
 #include "scene/scene_loader.h"
@@ -131,6 +132,50 @@ TEST(RenderStats, MirrorSphereReflectionRaysEqualItsPixels) {
   EXPECT_GT(spherePixels, 500u);
   EXPECT_EQ(r.stats.reflection, spherePixels);
   EXPECT_EQ(r.stats.maxDepth, 1u);
+}
+
+TEST(RenderStats, SpecularOnlySurfacesSampleALightOnlyWhereItsHighlightCounts) {
+  // A sphere with no diffuse term (as glass) lit by one light: its only use for the light is the
+  // Phong highlight, which at shininess 300 falls below kNegligibleHighlight a few degrees from
+  // the mirror direction, so only those pixels trace a shadow ray. With the least diffuse term,
+  // every pixel that faces the light does. Counted here in double precision, per pixel centre.
+  const char* const scene = R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y": 40 },
+    "image": { "width": 64, "height": 48 }, "ambient": [0.2, 0.2, 0.2], "render": { "max_depth": 0 },
+    "materials": { "m": { "color": [1, 1, 1], "ambient": 0.5, "diffuse": DIFFUSE, "specular": 0.9, "shininess": 300 } },
+    "lights": [ { "position": [3, 4, 5] } ],
+    "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 1.2, "material": "m" },
+                 { "type": "sphere", "center": [1.5, 2, 2.5], "radius": 0.2, "material": "m" } ] })";
+  auto withDiffuse = [&](const char* kd) {
+    std::string json = scene;
+    json.replace(json.find("DIFFUSE"), 7, kd);
+    return sceneFromJson(json);
+  };
+  Scene specularOnly = withDiffuse("0");
+  ReferenceTracer ref(specularOnly);
+  const glm::dvec3 light = specularOnly.lights[0].position;
+  std::uint64_t facing = 0, highlight = 0;
+  for (std::uint32_t y = 0; y < 48; ++y) {
+    for (std::uint32_t x = 0; x < 64; ++x) {
+      glm::dvec3 o = ref.eyeOrigin(), d = ref.eyeDirection(x + 0.5, y + 0.5);
+      double b = glm::dot(o, d), c = glm::dot(o, o) - 1.2 * 1.2, disc = b * b - c;
+      if (disc <= 0) continue; // misses the large sphere (the small one is out of view)
+      glm::dvec3 p = o + (-b - std::sqrt(disc)) * d;
+      glm::dvec3 n = glm::normalize(p), l = glm::normalize(light - p);
+      double ndotl = glm::dot(n, l);
+      if (ndotl <= 0) continue;
+      ++facing;
+      double rv = glm::dot(2.0 * ndotl * n - l, -d);
+      highlight += rv > 0 && 0.9 * std::pow(rv, 300.0) >= gpu::kNegligibleHighlight;
+    }
+  }
+  ASSERT_GT(facing, 500u);
+  ASSERT_GT(highlight, 10u);
+  EXPECT_LT(highlight, facing / 4);
+  RenderResult r = render(specularOnly);
+  // float against double: a pixel whose highlight lies within rounding of the floor may go either way.
+  EXPECT_NEAR(static_cast<double>(r.stats.shadow), static_cast<double>(highlight), 2.0);
+  RenderResult diffuse = render(withDiffuse("1e-6"));
+  EXPECT_NEAR(static_cast<double>(diffuse.stats.shadow), static_cast<double>(facing), 2.0);
 }
 
 TEST(RenderBailout, RaisingItMonotonicallyReducesRaysAndZeroTracesEverything) {

@@ -178,15 +178,19 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
     float ndotl = dot(nsf, l);
     // A light behind the surface (geometrically, or for the shading normal) does not light it.
     // One condition instead of a `continue` per test: on CPU drivers each masks the rest.
-    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0;
+    vec3 r = reflect(-l, nsf);
+    float rv = dot(r, v);
+    // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
+    float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
+    // Without a diffuse term a light adds only its highlight, which a sharp one (glass: shininess
+    // 300) confines to a few degrees around the mirror direction; elsewhere it is below
+    // kNegligibleHighlight of the light's colour, or exactly zero, and its shadow ray is not traced:
+    // nearly half of the glass scene's shadow rays (docs/performance.md, "Highlights too faint to see").
+    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0 && (kd > 0.0 || spec >= kNegligibleHighlight);
     if (lit) {
       vec3 visible = vec3(1.0);
       if (RECORD_TREE) treeShadowStart();
       if (SHADOWS && castsShadows(light)) visible = shadowTransmittance(origin, lightPosition(light), i, s.kind, s.index);
-      vec3 r = reflect(-l, nsf);
-      float rv = dot(r, v);
-      // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
-      float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
       if (maxComponent(visible) > 0.0) color += visible * lightColor(light) * (kd * ndotl * base + spec);
       if (RECORD_TREE) {
         vec3 share = maxComponent(visible) > 0.0 ? visible * lightColor(light) * (kd * ndotl * base + spec) : vec3(0.0);

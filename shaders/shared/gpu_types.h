@@ -197,6 +197,10 @@ VKRAY_CONST(uint, kNoMedium, 0xFFFFu);      // empty slot in the packed media st
 VKRAY_CONST(uint, kMaxMaterials, 65535u);   // material ids are packed in 16 bits
 VKRAY_CONST(uint, kNoNormals, 0xFFFFFFFFu); // Triangle.v1.w: flat triangle
 VKRAY_CONST(float, kNaiveEpsilon, 1e-4);    // the textbook fixed t-epsilon of naive numerics
+// A light that can only add a Phong highlight (the surface has no diffuse term) is not sampled,
+// shadow ray and all, where the highlight is below this share of the light's colour: glass and
+// other specular-only finishes (shaders/lib/shade.glsl, localShade; docs/performance.md).
+VKRAY_CONST(float, kNegligibleHighlight, 1e-7);
 
 // BVH leaf references pack the primitive kind into the top two bits.
 VKRAY_CONST(uint, kPrimSphere, 0u);
