@@ -133,7 +133,7 @@ vec3 traceRadiance(vec3 origin, vec3 dir) {
         curvature = front ? s.curvature : -s.curvature;
         gConeFootprint = coneWidth / max(abs(dot(s.ng, cur.dir)), 1e-6);
       }
-      radiance += w * localShade(mat, s, ngf, nsf, cur.dir);
+      radiance += w * localShade(mat, s, ngf, nsf, cur.dir, w);
 
       if ((REFLECTION || REFRACTION) && depth < maxDepth) {
         float kr = reflectance(mat);

@@ -206,8 +206,9 @@ dvec3 ReferenceTracer::shade(const RefHit& h, const dvec3& d, const dvec3& weigh
     dvec3 r = 2.0 * ndotl * n - l;
     double rv = glm::dot(r, v);
     double spec = (m.specular > 0 && rv > 0) ? m.specular * std::pow(rv, m.shininess) : 0.0;
-    // As the kernel: a light that could add only a negligible highlight is not sampled.
-    if (m.diffuse <= 0 && spec < gpu::kNegligibleHighlight) continue;
+    // As the kernel: a light that could add only a negligible highlight to the pixel is not sampled.
+    const dvec3 reach = weight * light.color;
+    if (m.diffuse <= 0 && std::max({reach.x, reach.y, reach.z}) * spec < gpu::kNegligibleHighlight) continue;
     dvec3 visible(1.0);
     RefHit blocker;
     if (light.shadows) visible = shadowTransmittance(h.p, light.position, &blocker);

@@ -160,7 +160,7 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos, uint light, uint kind, uint
 
 // Ambient + for each light: visibility * colour * (diffuse * base * n.l + specular * (r.v)^shininess).
 // ngf/nsf: geometric and shading normals turned towards the incoming ray.
-vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
+vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir, vec3 weight) {
   vec3 base = baseColor(mat, s);
   vec3 color = ambientFactor(mat) * base * frame.ambientLight.rgb;
   if (RECORD_TREE) treeAddContribution(gTreeCurrent, gTreeWeight * color);
@@ -183,10 +183,12 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir) {
     // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
     float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
     // Without a diffuse term a light adds only its highlight, which a sharp one (glass: shininess
-    // 300) confines to a few degrees around the mirror direction; elsewhere it is below
-    // kNegligibleHighlight of the light's colour, or exactly zero, and its shadow ray is not traced:
-    // nearly half of the glass scene's shadow rays (docs/performance.md, "Highlights too faint to see").
-    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0 && (kd > 0.0 || spec >= kNegligibleHighlight);
+    // 300) confines to a few degrees around the mirror direction; elsewhere what it would add to the
+    // pixel (the branch's weight times the light's colour times the highlight) is below
+    // kNegligibleHighlight, or exactly zero, and its shadow ray is not traced: nearly half of the
+    // glass scene's shadow rays (docs/performance.md, "Highlights too faint to see").
+    bool visibleHighlight = maxComponent(weight * lightColor(light)) * spec >= kNegligibleHighlight;
+    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0 && (kd > 0.0 || visibleHighlight);
     if (lit) {
       vec3 visible = vec3(1.0);
       if (RECORD_TREE) treeShadowStart();

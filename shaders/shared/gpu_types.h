@@ -198,8 +198,9 @@ VKRAY_CONST(uint, kMaxMaterials, 65535u);   // material ids are packed in 16 bit
 VKRAY_CONST(uint, kNoNormals, 0xFFFFFFFFu); // Triangle.v1.w: flat triangle
 VKRAY_CONST(float, kNaiveEpsilon, 1e-4);    // the textbook fixed t-epsilon of naive numerics
 // A light that can only add a Phong highlight (the surface has no diffuse term) is not sampled,
-// shadow ray and all, where the highlight is below this share of the light's colour: glass and
-// other specular-only finishes (shaders/lib/shade.glsl, localShade; docs/performance.md).
+// shadow ray and all, where the highlight would add less than this to the pixel in every channel
+// (linear RGB, the branch's weight included): glass and other specular-only finishes
+// (shaders/lib/shade.glsl, localShade; docs/performance.md, "Highlights too faint to see").
 VKRAY_CONST(float, kNegligibleHighlight, 1e-7);
 
 // BVH leaf references pack the primitive kind into the top two bits.
