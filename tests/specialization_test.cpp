@@ -136,24 +136,24 @@ TEST(RenderStats, MirrorSphereReflectionRaysEqualItsPixels) {
 
 TEST(RenderStats, SpecularOnlySurfacesSampleALightOnlyWhereItsHighlightCounts) {
   // A sphere with no diffuse term (as glass) lit by one light: its only use for the light is the
-  // Phong highlight, which at shininess 300 falls below kNegligibleHighlight a few degrees from
-  // the mirror direction, so only those pixels trace a shadow ray. With the least diffuse term,
-  // every pixel that faces the light does. Counted here in double precision, per pixel centre.
-  const char* const scene = R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y": 40 },
-    "image": { "width": 64, "height": 48 }, "ambient": [0.2, 0.2, 0.2], "render": { "max_depth": 0 },
-    "materials": { "m": { "color": [1, 1, 1], "ambient": 0.5, "diffuse": DIFFUSE, "specular": 0.9, "shininess": 300 } },
-    "lights": [ { "position": [3, 4, 5] } ],
-    "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 1.2, "material": "m" },
-                 { "type": "sphere", "center": [1.5, 2, 2.5], "radius": 0.2, "material": "m" } ] })";
-  auto withDiffuse = [&](const char* kd) {
-    std::string json = scene;
-    json.replace(json.find("DIFFUSE"), 7, kd);
-    return sceneFromJson(json);
+  // Phong highlight, which at shininess 300 adds less than kNegligibleHighlight to the pixel a few
+  // degrees from the mirror direction, so only those pixels trace a shadow ray; a light 10^6 times
+  // as bright keeps a wider highlight and traces more. With the least diffuse term, every pixel
+  // that faces the light does. Counted here in double precision, per pixel centre.
+  auto sceneWith = [](const std::string& kd, const std::string& light) {
+    return sceneFromJson(R"({ "camera": { "position": [0, 0, 5], "look_at": [0, 0, 0], "fov_y": 40 },
+      "image": { "width": 64, "height": 48 }, "ambient": [0.2, 0.2, 0.2], "render": { "max_depth": 0 },
+      "materials": { "m": { "color": [1, 1, 1], "ambient": 0.5, "specular": 0.9, "shininess": 300, "diffuse": )" +
+                         kd + R"( } },
+      "lights": [ { "position": [3, 4, 5], "color": [)" +
+                         light + "," + light + "," + light + R"(] } ],
+      "objects": [ { "type": "sphere", "center": [0, 0, 0], "radius": 1.2, "material": "m" },
+                   { "type": "sphere", "center": [1.5, 2, 2.5], "radius": 0.2, "material": "m" } ] })");
   };
-  Scene specularOnly = withDiffuse("0");
+  Scene specularOnly = sceneWith("0", "1");
   ReferenceTracer ref(specularOnly);
   const glm::dvec3 light = specularOnly.lights[0].position;
-  std::uint64_t facing = 0, highlight = 0;
+  std::uint64_t facing = 0, highlight = 0, brightHighlight = 0;
   for (std::uint32_t y = 0; y < 48; ++y) {
     for (std::uint32_t x = 0; x < 64; ++x) {
       glm::dvec3 o = ref.eyeOrigin(), d = ref.eyeDirection(x + 0.5, y + 0.5);
@@ -165,17 +165,20 @@ TEST(RenderStats, SpecularOnlySurfacesSampleALightOnlyWhereItsHighlightCounts) {
       if (ndotl <= 0) continue;
       ++facing;
       double rv = glm::dot(2.0 * ndotl * n - l, -d);
-      highlight += rv > 0 && 0.9 * std::pow(rv, 300.0) >= gpu::kNegligibleHighlight;
+      double spec = rv > 0 ? 0.9 * std::pow(rv, 300.0) : 0.0;
+      highlight += spec >= gpu::kNegligibleHighlight;
+      brightHighlight += 1e6 * spec >= gpu::kNegligibleHighlight;
     }
   }
   ASSERT_GT(facing, 500u);
   ASSERT_GT(highlight, 10u);
   EXPECT_LT(highlight, facing / 4);
-  RenderResult r = render(specularOnly);
+  EXPECT_GT(brightHighlight, highlight + 10);
   // float against double: a pixel whose highlight lies within rounding of the floor may go either way.
-  EXPECT_NEAR(static_cast<double>(r.stats.shadow), static_cast<double>(highlight), 2.0);
-  RenderResult diffuse = render(withDiffuse("1e-6"));
-  EXPECT_NEAR(static_cast<double>(diffuse.stats.shadow), static_cast<double>(facing), 2.0);
+  EXPECT_NEAR(static_cast<double>(render(specularOnly).stats.shadow), static_cast<double>(highlight), 2.0);
+  EXPECT_NEAR(static_cast<double>(render(sceneWith("0", "1e6")).stats.shadow), static_cast<double>(brightHighlight),
+              2.0);
+  EXPECT_NEAR(static_cast<double>(render(sceneWith("1e-6", "1")).stats.shadow), static_cast<double>(facing), 2.0);
 }
 
 TEST(RenderBailout, RaisingItMonotonicallyReducesRaysAndZeroTracesEverything) {
