@@ -82,6 +82,26 @@ TEST(FeaturesAnalysis, FloorBelowEverythingCannotCastShadows) {
   EXPECT_EQ(planesThatCanOcclude(walls), (std::vector<bool>{true, true}));
 }
 
+TEST(FeaturesAnalysis, OnlySpecularOnlyMaterialsCompileInTheFaintHighlightTest) {
+  // Glass has no diffuse term, so its kernel weighs each light's highlight before sampling it; the
+  // showcase's materials all have one, and its kernel compiles the test out (kSpecSpecularOnly).
+  for (const char* name : {"glass.json", "showcase.json"}) {
+    SCOPED_TRACE(name);
+    Scene scene = loadScene(std::filesystem::path(VKRAY_SOURCE_DIR) / "scenes" / name);
+    Features f = analyzeScene(scene, scene.render);
+    const bool glass = std::string(name) == "glass.json";
+    EXPECT_EQ(f.specularOnlyMaterial, glass);
+    vulkan::Specialization spec =
+        specializationFor(f, scene.render, RenderOptions{}, SceneShape{}, SceneMemoryUse{}, false, false);
+    EXPECT_EQ(spec.values().at(gpu::kSpecSpecularOnly), glass ? 1u : 0u);
+    RenderOptions everything;
+    everything.specialize = false; // --no-specialize: every feature compiled in
+    vulkan::Specialization all =
+        specializationFor(f, scene.render, everything, SceneShape{}, SceneMemoryUse{}, false, false);
+    EXPECT_EQ(all.values().at(gpu::kSpecSpecularOnly), 1u);
+  }
+}
+
 TEST(RenderStats, NoMirrorsAtDepthTenTracesNoSecondaryRaysAndMatchesDepthZero) {
   Scene s = sceneFromJson(R"({ "base": "showcase.json", "image": { "width": 64, "height": 48 },
     "materials": { "mirror": { "reflection": 0 }, "floor": { "reflection": 0 }, "glossy": { "reflection": 0 } } })");

@@ -64,6 +64,7 @@ vulkan::Specialization specializationFor(const Features& f, const RenderSettings
   spec.set(gpu::kSpecTextures, all || f.textures);
   spec.set(gpu::kSpecAlphaMask, all || f.alphaMask);
   spec.set(gpu::kSpecVertexColors, all || f.vertexColors);
+  spec.set(gpu::kSpecSpecularOnly, all || f.specularOnlyMaterial);
   spec.set(gpu::kSpecTextureFilter, static_cast<std::uint32_t>(s.textureFilter));
   spec.set(gpu::kSpecSceneInUbo, memory.scene);
   spec.set(gpu::kSpecShadingInUbo, memory.shading);

@@ -88,6 +88,7 @@ Features analyzeScene(const Scene& scene, const RenderSettings& settings) {
     if (m.checker) f.checker = true;
     if (m.reflection > 0.0) f.anyReflectiveMaterial = true;
     if (m.transmission > 0.0) f.anyTransmissiveMaterial = true;
+    if (m.diffuse <= 0.0 && m.specular > 0.0) f.specularOnlyMaterial = true;
     f.maxBranchWeight = std::max(f.maxBranchWeight, std::min(1.0, m.reflection + m.transmission));
   }
   f.lights = static_cast<int>(scene.lights.size());

@@ -52,6 +52,9 @@ struct Features {
   // Facts about the scene alone, kept so settings can be re-applied (the viewer changes them live).
   bool anyReflectiveMaterial = false;
   bool anyTransmissiveMaterial = false;
+  // Some material has a highlight but no diffuse term: its lights are sampled only where the
+  // highlight can show (gpu::kNegligibleHighlight).
+  bool specularOnlyMaterial = false;
 
   // One line per aspect, in words: "shadows: on (2 lights)".
   std::vector<std::string> explain() const;

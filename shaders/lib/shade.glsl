@@ -158,6 +158,13 @@ vec3 shadowTransmittance(vec3 origin, vec3 lightPos, uint light, uint kind, uint
   return transmit;
 }
 
+// The Phong highlight specular * (r.v)^shininess, r the mirror of the light direction l about n.
+float phongHighlight(vec3 l, vec3 n, vec3 v, float ks, float shininess) {
+  float rv = dot(reflect(-l, n), v);
+  // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
+  return (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
+}
+
 // Ambient + for each light: visibility * colour * (diffuse * base * n.l + specular * (r.v)^shininess).
 // ngf/nsf: geometric and shading normals turned towards the incoming ray.
 vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir, vec3 weight) {
@@ -178,21 +185,21 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir, vec3 w
     float ndotl = dot(nsf, l);
     // A light behind the surface (geometrically, or for the shading normal) does not light it.
     // One condition instead of a `continue` per test: on CPU drivers each masks the rest.
-    vec3 r = reflect(-l, nsf);
-    float rv = dot(r, v);
-    // pow(x, 0) is 1 but GLSL leaves pow(0, y <= 0) undefined: only evaluate it for rv > 0.
-    float spec = (ks > 0.0 && rv > 0.0) ? ks * pow(rv, shininess) : 0.0;
     // Without a diffuse term a light adds only its highlight, which a sharp one (glass: shininess
     // 300) confines to a few degrees around the mirror direction; elsewhere what it would add to the
     // pixel (the branch's weight times the light's colour times the highlight) is below
     // kNegligibleHighlight, or exactly zero, and its shadow ray is not traced: nearly half of the
-    // glass scene's shadow rays (docs/performance.md, "Highlights too faint to see").
-    bool visibleHighlight = maxComponent(weight * lightColor(light)) * spec >= kNegligibleHighlight;
-    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0 && (kd > 0.0 || visibleHighlight);
+    // glass scene's shadow rays (docs/performance.md, "Highlights too faint to see"). Scenes whose
+    // materials all have a diffuse term compile the test out (SPECULAR_ONLY) and compute the
+    // highlight only where the light is used, as before.
+    float spec = SPECULAR_ONLY ? phongHighlight(l, nsf, v, ks, shininess) : 0.0;
+    bool showsHighlight = maxComponent(weight * lightColor(light)) * spec >= kNegligibleHighlight;
+    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0 && (!SPECULAR_ONLY || kd > 0.0 || showsHighlight);
     if (lit) {
       vec3 visible = vec3(1.0);
       if (RECORD_TREE) treeShadowStart();
       if (SHADOWS && castsShadows(light)) visible = shadowTransmittance(origin, lightPosition(light), i, s.kind, s.index);
+      if (!SPECULAR_ONLY) spec = phongHighlight(l, nsf, v, ks, shininess);
       if (maxComponent(visible) > 0.0) color += visible * lightColor(light) * (kd * ndotl * base + spec);
       if (RECORD_TREE) {
         vec3 share = maxComponent(visible) > 0.0 ? visible * lightColor(light) * (kd * ndotl * base + spec) : vec3(0.0);

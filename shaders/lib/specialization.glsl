@@ -39,6 +39,7 @@ layout(constant_id = kSpecAlphaMask) const bool ALPHA_MASK = false;
 layout(constant_id = kSpecVertexColors) const bool VERTEX_COLORS = false;
 layout(constant_id = kSpecPixelRays) const bool PIXEL_RAYS = false;
 layout(constant_id = kSpecThinLens) const bool THIN_LENS = false;
+layout(constant_id = kSpecSpecularOnly) const bool SPECULAR_ONLY = true;
 
 const bool ROBUST = NUMERICS == kNumericsRobust;
 // The invocation counts its rays (gCount) for the statistics buffer, or for its pixel's cost alone.

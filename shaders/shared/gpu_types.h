@@ -148,7 +148,11 @@ VKRAY_CONST(uint, kSpecShadowEntries, 35u);
 // traverseBvh). Two where the tree is at least kBvhTwoStepDepth deep: a vote costs about a tenth of
 // a step on lavapipe, and in a deep tree a lane rarely finishes its descent after the first of two.
 VKRAY_CONST(uint, kSpecBvhStepsPerVote, 36u);
-VKRAY_CONST(uint, kSpecCount, 37u);
+// Some material has a Phong highlight and no diffuse term (glass, a polished metal): a light there is
+// sampled only where its highlight can show (kNegligibleHighlight, shade.glsl). Off, the test and the
+// highlight computed ahead of it compile out.
+VKRAY_CONST(uint, kSpecSpecularOnly, 37u);
+VKRAY_CONST(uint, kSpecCount, 38u);
 VKRAY_CONST(int, kBvhTwoStepDepth, 16);
 VKRAY_CONST(uint, kRuntimeCount, 0xFFFFFFFFu);
 VKRAY_CONST(uint, kMaxUnrolledCount, 16u); // arrays up to this size get their count baked in
