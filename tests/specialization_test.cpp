@@ -176,11 +176,10 @@ TEST(RenderStats, SpecularOnlySurfacesSampleALightOnlyWhereItsHighlightCounts) {
   std::uint64_t facing = 0, highlight = 0, brightHighlight = 0;
   for (std::uint32_t y = 0; y < 48; ++y) {
     for (std::uint32_t x = 0; x < 64; ++x) {
-      glm::dvec3 o = ref.eyeOrigin(), d = ref.eyeDirection(x + 0.5, y + 0.5);
-      double b = glm::dot(o, d), c = glm::dot(o, o) - 1.2 * 1.2, disc = b * b - c;
-      if (disc <= 0) continue; // misses the large sphere (the small one is out of view)
-      glm::dvec3 p = o + (-b - std::sqrt(disc)) * d;
-      glm::dvec3 n = glm::normalize(p), l = glm::normalize(light - p);
+      glm::dvec3 d = ref.eyeDirection(x + 0.5, y + 0.5);
+      RefHit h = ref.closestHit(ref.eyeOrigin(), d);
+      if (!h.hit()) continue; // the small sphere is out of view: every hit is the large one's
+      glm::dvec3 n = glm::normalize(h.n), l = glm::normalize(light - h.p);
       double ndotl = glm::dot(n, l);
       if (ndotl <= 0) continue;
       ++facing;
