@@ -313,6 +313,7 @@ void flushStats() {
                    ? subgroupAdd(uvec4(gCount.refractionRays, gCount.stackOverflow, gCount.refinedPixels, gCount.nonFinite))
                    : uvec4(0u, 0u, 0u, subgroupAdd(gCount.nonFinite));
   uint deepest = BOUNCES ? subgroupMax(gCount.maxDepth) : 0u;
+  uint faint = SPECULAR_ONLY ? subgroupAdd(gCount.faintHighlights) : 0u;
   if (subgroupElect()) {
     atomicAdd(stats.eyeRays, rays.x);
     if (SHADOWS) atomicAdd(stats.shadowRays, rays.y);
@@ -327,6 +328,7 @@ void flushStats() {
     }
     if (REFINE_PASS) atomicAdd(stats.refinedPixels, rest.z);
     if (rest.w != 0u) atomicAdd(stats.nonFinite, rest.w);
+    if (faint != 0u) atomicAdd(stats.faintHighlights, faint);
   }
 }
 

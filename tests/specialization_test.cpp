@@ -194,10 +194,19 @@ TEST(RenderStats, SpecularOnlySurfacesSampleALightOnlyWhereItsHighlightCounts) {
   EXPECT_LT(highlight, facing / 4);
   EXPECT_GT(brightHighlight, highlight + 10);
   // float against double: a pixel whose highlight lies within rounding of the floor may go either way.
-  EXPECT_NEAR(static_cast<double>(render(specularOnly).stats.shadow), static_cast<double>(highlight), 2.0);
-  EXPECT_NEAR(static_cast<double>(render(sceneWith("0", "1e6")).stats.shadow), static_cast<double>(brightHighlight),
-              2.0);
-  EXPECT_NEAR(static_cast<double>(render(sceneWith("1e-6", "1")).stats.shadow), static_cast<double>(facing), 2.0);
+  // Each facing pixel either traces its shadow ray or counts a faint highlight (--stats): the two
+  // add up to the pixels that face the light.
+  RenderResult dim = render(specularOnly);
+  EXPECT_NEAR(static_cast<double>(dim.stats.shadow), static_cast<double>(highlight), 2.0);
+  EXPECT_NEAR(static_cast<double>(dim.stats.faintHighlights), static_cast<double>(facing - highlight), 2.0);
+  EXPECT_NEAR(static_cast<double>(dim.stats.shadow + dim.stats.faintHighlights), static_cast<double>(facing), 2.0);
+  RenderResult bright = render(sceneWith("0", "1e6"));
+  EXPECT_NEAR(static_cast<double>(bright.stats.shadow), static_cast<double>(brightHighlight), 2.0);
+  EXPECT_EQ(bright.stats.shadow + bright.stats.faintHighlights, dim.stats.shadow + dim.stats.faintHighlights);
+  RenderResult diffuse = render(sceneWith("1e-6", "1"));
+  EXPECT_NEAR(static_cast<double>(diffuse.stats.shadow), static_cast<double>(facing), 2.0);
+  EXPECT_EQ(diffuse.stats.faintHighlights, 0u); // a diffuse term uses every light that faces it
+  EXPECT_EQ(diffuse.stats.shadow, dim.stats.shadow + dim.stats.faintHighlights);
 }
 
 TEST(RenderBailout, RaisingItMonotonicallyReducesRaysAndZeroTracesEverything) {

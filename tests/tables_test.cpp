@@ -101,6 +101,7 @@ TEST(RayCounters, HostStatisticsFollowTheList) {
   raw.refinedPixels = 8;
   raw.nonFinite = 9;
   raw.maxDepth = 10;
+  raw.faintHighlights = 11;
   RayStats s = RayStats::fromGpu(raw);
   EXPECT_EQ(s.eye, 1u);
   EXPECT_EQ(s.shadow, 2u);
@@ -112,6 +113,7 @@ TEST(RayCounters, HostStatisticsFollowTheList) {
   EXPECT_EQ(s.refinedPixels, 8u);
   EXPECT_EQ(s.nonFinite, 9u);
   EXPECT_EQ(s.maxDepth, 10u);
+  EXPECT_EQ(s.faintHighlights, 11u);
   EXPECT_EQ(s.total(), 10u);
 
   RayStats t = s;
@@ -127,7 +129,7 @@ TEST(RayCounters, HostStatisticsFollowTheList) {
   EXPECT_EQ(avg.maxDepth, 10u);
 
   auto named = s.named();
-  ASSERT_EQ(named.size(), 10u);
+  ASSERT_EQ(named.size(), 11u);
   EXPECT_EQ(named.front().first, "eye rays");
   EXPECT_EQ(named.front().second, 1u);
   EXPECT_EQ(named.back().first, "deepest bounce");

@@ -194,7 +194,11 @@ vec3 localShade(Material mat, Surface s, vec3 ngf, vec3 nsf, vec3 rayDir, vec3 w
     // highlight only where the light is used, as before.
     float spec = SPECULAR_ONLY ? phongHighlight(l, nsf, v, ks, shininess) : 0.0;
     bool showsHighlight = maxComponent(weight * lightColor(light)) * spec >= kNegligibleHighlight;
-    bool lit = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0 && (!SPECULAR_ONLY || kd > 0.0 || showsHighlight);
+    bool faces = lightable && dist > 0.0 && dot(ngf, l) > 0.0 && ndotl > 0.0;
+    bool lit = faces && (!SPECULAR_ONLY || kd > 0.0 || showsHighlight);
+    // --stats' "faint highlights": the lights the rule above left unsampled, each a shadow ray (or
+    // more, through glass) not traced.
+    if (SPECULAR_ONLY && COUNT_STATS) gCount.faintHighlights += uint(faces && !lit && SHADOWS && castsShadows(light));
     if (lit) {
       vec3 visible = vec3(1.0);
       if (RECORD_TREE) treeShadowStart();

@@ -499,11 +499,12 @@ struct FrameParams {
   X(shadow, shadowRays, "shadow rays", Sum)                                                                            \
   X(reflection, reflectionRays, "reflection rays", Sum)                                                                \
   X(refraction, refractionRays, "refraction rays", Sum)                                                                \
-  X(bailoutSaved, bailoutSaved, "bailout saved", Sum)    /* branches below the bailout weight */                       \
-  X(stackOverflow, stackOverflow, "stack overflow", Sum) /* branches dropped: explicit stack full */                   \
-  X(truncated, truncated, "truncated samples", Sum)      /* cut short by the driver's loop limit */                    \
-  X(refinedPixels, refinedPixels, "refined pixels", Sum) /* adaptive AA: pixels supersampled */                        \
-  X(nonFinite, nonFinite, "non-finite samples", Sum)     /* NaN/Inf replaced by black; expected 0 */                   \
+  X(bailoutSaved, bailoutSaved, "bailout saved", Sum)          /* branches below the bailout weight */                 \
+  X(faintHighlights, faintHighlights, "faint highlights", Sum) /* lights not sampled (kNegligibleHighlight) */         \
+  X(stackOverflow, stackOverflow, "stack overflow", Sum)       /* branches dropped: explicit stack full */             \
+  X(truncated, truncated, "truncated samples", Sum)            /* cut short by the driver's loop limit */              \
+  X(refinedPixels, refinedPixels, "refined pixels", Sum)       /* adaptive AA: pixels supersampled */                  \
+  X(nonFinite, nonFinite, "non-finite samples", Sum)           /* NaN/Inf replaced by black; expected 0 */             \
   X(maxDepth, maxDepth, "deepest bounce", Max)
 
 #define VKRAY_GPU_COUNTER_FIELD(host, gpu, label, combine) uint gpu;
@@ -512,7 +513,6 @@ struct RayStats {
   // Always 0. The kernels read it at run time into gDynamicZero (common.glsl), a zero the compiler
   // cannot see through.
   uint zero;
-  uint unused;
 };
 #undef VKRAY_GPU_COUNTER_FIELD
 
