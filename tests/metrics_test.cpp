@@ -6,6 +6,7 @@
 
 #include <gtest/gtest.h>
 
+#include "image/decode.h"
 #include "image/image_io.h"
 #include "image/metrics.h"
 #include "util/error.h"
@@ -70,8 +71,9 @@ TEST(ImageIo, SrgbEncodingIsTheStandardCurve) {
 
 // encodeSrgb8 reads its bytes off a table of the formula's thresholds: it must give the formula's
 // bytes for every float, which holds if the formula is monotone. Checked where it could break,
-// 2048 floats on either side of every threshold, and across [0, 1] in steps of 61 floats
-// (17 million values), plus infinities and values above 1.
+// 2048 floats on either side of every threshold, the first and last float of each of the lookup's
+// buckets (2^15 bit patterns each), and across [0, 1] in steps of 61 floats (17 million values),
+// plus infinities and values above 1.
 TEST(ImageIo, SrgbTableGivesTheFormulasBytes) {
   const std::uint32_t one = std::bit_cast<std::uint32_t>(1.0f);
   std::uint32_t mismatches = 0;
@@ -82,6 +84,10 @@ TEST(ImageIo, SrgbTableGivesTheFormulasBytes) {
     }
   };
   for (std::uint32_t b = 0; b <= one; b += 61) check(b);
+  for (std::uint32_t b = 0; b < one; b += 1u << 15) {
+    check(b);
+    check(b + (1u << 15) - 1);
+  }
   std::uint32_t lo = 0;
   for (int k = 1; k < 256; ++k) {
     // The first float of byte k: where the formula steps from k - 1.
@@ -118,6 +124,39 @@ TEST(ImageIo, PfmAndPngRoundTrip) {
     }
   }
   std::filesystem::remove_all(dir);
+}
+
+// encodePng deflates the rows in pieces of about 128 KiB of filtered bytes side by side and joins
+// them into one zlib stream. libpng must decode every pixel's sRGB byte exactly: one piece (small
+// images), several with a short last one (300 x 1000: 145 rows a piece, 7 pieces), and rows longer
+// than a piece (one row a piece), over noise, where Sub and deflate gain nothing, and a gradient.
+TEST(ImageIo, PngPiecesDecodeToEveryPixelsSrgbByte) {
+  std::uint32_t state = 12345;
+  auto noise = [&state]() {
+    state = state * 1664525u + 1013904223u;
+    return static_cast<float>(state >> 8) / 16777216.0f * 1.2f; // a fifth above 1: clamped
+  };
+  for (auto [w, h] : {std::pair{1u, 1u}, {5u, 3u}, {300u, 1000u}, {50000u, 3u}}) {
+    Image img(w, h);
+    for (std::uint32_t y = 0; y < h; ++y) {
+      for (std::uint32_t x = 0; x < w; ++x) {
+        img.at(x, y) = (y & 1u) ? glm::vec3(noise(), noise(), noise()) : glm::vec3(x / float(w), y / float(h), 0.5f);
+      }
+    }
+    const std::vector<std::uint8_t> png = encodePng(img);
+    EXPECT_EQ(png, encodePng(img)) << w << "x" << h; // the same bytes every time
+    DecodeLimits limits;
+    limits.maxSide = 50000; // a texture's limit, not an output's
+    Rgba8Image back = decodePngOrJpeg(png.data(), png.size(), "pieces.png", limits);
+    ASSERT_EQ(back.width, w);
+    ASSERT_EQ(back.height, h);
+    std::size_t wrong = 0;
+    for (std::size_t i = 0; i < img.pixels.size(); ++i) {
+      for (int c = 0; c < 3; ++c) wrong += back.rgba[i * 4 + c] != encodeSrgb8(img.pixels[i][c]);
+      wrong += back.rgba[i * 4 + 3] != 255;
+    }
+    EXPECT_EQ(wrong, 0u) << w << "x" << h;
+  }
 }
 
 TEST(ImageIo, AtomicWriteReplacesOnlyWhenComplete) {
