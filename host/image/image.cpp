@@ -72,17 +72,29 @@ struct SrgbTable {
   }
 };
 
+const SrgbTable& srgbTable() {
+  static const SrgbTable table;
+  return table;
+}
+
+// The byte of one value: a table lookup and one comparison instead of a pow, or of a binary search
+// whose branches the CPU cannot predict (that took 25 ms of an 800x600 PNG's 34 ms).
+inline std::uint8_t lookUpSrgb8(const SrgbTable& table, float linear) {
+  if (!(linear > 0.0f)) return 0; // zero, negative, NaN
+  if (!(linear < 1.0f)) return 255;
+  const std::uint32_t k = table.bucketByte[std::bit_cast<std::uint32_t>(linear) >> kBucketShift];
+  return static_cast<std::uint8_t>(k + (linear >= table.thresholds[k + 1] ? 1u : 0u));
+}
+
 } // namespace
 
 std::uint8_t encodeSrgb8(float linear) {
-  static const SrgbTable table;
-  if (!(linear > 0.0f)) return 0; // zero, negative, NaN
-  if (!(linear < 1.0f)) return 255;
-  // A table lookup and one comparison instead of a pow, or of a binary search whose branches the
-  // CPU cannot predict (25 ms of an 800x600 PNG's 34 ms; now a few): PNG output encodes a value per
-  // channel and pixel.
-  const std::uint32_t k = table.bucketByte[std::bit_cast<std::uint32_t>(linear) >> kBucketShift];
-  return static_cast<std::uint8_t>(k + (linear >= table.thresholds[k + 1] ? 1u : 0u));
+  return lookUpSrgb8(srgbTable(), linear);
+}
+
+void encodeSrgb8(const float* linear, std::size_t count, std::uint8_t* out) {
+  const SrgbTable& table = srgbTable();
+  for (std::size_t i = 0; i < count; ++i) out[i] = lookUpSrgb8(table, linear[i]);
 }
 
 } // namespace vkray

@@ -1,6 +1,7 @@
 // An image in linear RGB floats, row-major, (0, 0) at the top-left.
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -29,6 +30,8 @@ float srgbToLinear(float encoded);
 
 // 8-bit sRGB value of a linear value: clamped, encoded, rounded to nearest; NaN gives 0.
 std::uint8_t encodeSrgb8(float linear);
+// The same for `count` values at once (the table found once, the lookup inlined): PNG output.
+void encodeSrgb8(const float* linear, std::size_t count, std::uint8_t* out);
 // The same by the formula itself, a pow per call (encodeSrgb8 finds its bytes from a table of the
 // formula's 255 thresholds: the same bytes, several times faster).
 std::uint8_t encodeSrgb8Formula(float linear);

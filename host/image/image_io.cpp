@@ -147,10 +147,11 @@ std::vector<std::uint8_t> encodeRgbPng(const std::uint8_t* rgb, std::uint32_t wi
 std::vector<std::uint8_t> encodePng(const Image& image) {
   std::vector<std::uint8_t> rgb(static_cast<std::size_t>(image.width) * image.height * 3);
   // The sRGB bytes, a row range per thread (each writes its own bytes: the same result).
+  static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
+  const float* linear = &image.pixels.data()->x;
   parallelFor(image.height, 64, [&](std::size_t row0, std::size_t row1) {
-    for (std::size_t i = row0 * image.width; i < row1 * image.width; ++i) {
-      for (int c = 0; c < 3; ++c) rgb[i * 3 + static_cast<std::size_t>(c)] = encodeSrgb8(image.pixels[i][c]);
-    }
+    const std::size_t first = row0 * image.width * 3;
+    encodeSrgb8(linear + first, (row1 - row0) * image.width * 3, rgb.data() + first);
   });
   return encodeRgbPng(rgb.data(), image.width, image.height);
 }
