@@ -157,6 +157,7 @@ TEST(ImageIo, PngPiecesDecodeToEveryPixelsSrgbByte) {
     }
     EXPECT_EQ(wrong, 0u) << w << "x" << h;
   }
+  EXPECT_THROW(encodePng(Image(0, 3)), Error); // PNG has no empty image
 }
 
 TEST(ImageIo, AtomicWriteReplacesOnlyWhenComplete) {

@@ -108,6 +108,7 @@ DeflatedPiece deflateRows(const std::uint8_t* rgb, std::uint32_t width, std::uin
 }
 
 std::vector<std::uint8_t> encodeRgbPng(const std::uint8_t* rgb, std::uint32_t width, std::uint32_t height) {
+  if (width == 0 || height == 0) throw Error("PNG encoding failed: an image of no pixels"); // PNG has none
   const std::size_t rowBytes = std::size_t{3} * width + 1;
   const auto rowsPerPiece = static_cast<std::uint32_t>(std::max<std::size_t>(1, kPngPieceBytes / rowBytes));
   const std::uint32_t pieces = (height + rowsPerPiece - 1) / rowsPerPiece;
