@@ -108,7 +108,6 @@ DeflatedPiece deflateRows(const std::uint8_t* rgb, std::uint32_t width, std::uin
 }
 
 std::vector<std::uint8_t> encodeRgbPng(const std::uint8_t* rgb, std::uint32_t width, std::uint32_t height) {
-  if (width == 0 || height == 0) throw Error("PNG encoding failed: an image of no pixels"); // PNG has none
   const std::size_t rowBytes = std::size_t{3} * width + 1;
   const auto rowsPerPiece = static_cast<std::uint32_t>(std::max<std::size_t>(1, kPngPieceBytes / rowBytes));
   const std::uint32_t pieces = (height + rowsPerPiece - 1) / rowsPerPiece;
@@ -146,6 +145,11 @@ std::vector<std::uint8_t> encodeRgbPng(const std::uint8_t* rgb, std::uint32_t wi
 } // namespace
 
 std::vector<std::uint8_t> encodePng(const Image& image) {
+  if (image.width == 0 || image.height == 0) throw Error("PNG encoding failed: an image of no pixels"); // PNG has none
+  if (image.pixels.size() != static_cast<std::size_t>(image.width) * image.height) {
+    throw Error("PNG encoding failed: the image holds " + std::to_string(image.pixels.size()) + " pixels, not " +
+                std::to_string(image.width) + "x" + std::to_string(image.height));
+  }
   std::vector<std::uint8_t> rgb(static_cast<std::size_t>(image.width) * image.height * 3);
   // The sRGB bytes, a row range per thread (each writes its own bytes: the same result).
   static_assert(sizeof(glm::vec3) == 3 * sizeof(float));
