@@ -79,8 +79,8 @@ ProgressiveImage::ProgressiveImage(std::uint32_t width, std::uint32_t height, st
       rowEnd_(std::clamp(rowEnd, rowBegin_, height)), pixels_(static_cast<std::size_t>(width) * (rowEnd_ - rowBegin_)),
       errors_(pixels_.size(), std::numeric_limits<float>::infinity()) {}
 
-void ProgressiveImage::add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays) {
-  const std::size_t i = index(x, y);
+void ProgressiveImage::addPixel(std::uint32_t pixel, const glm::vec4& sums, const glm::vec4& halfAndRays) {
+  const std::size_t i = pixel - static_cast<std::size_t>(rowBegin_) * width_;
   PixelMoments& m = pixels_[i];
   // One call per pixel per pass: the blocks shift by one pass, and the estimate they gave so far
   // (kept by the last call) becomes the previous decision's.

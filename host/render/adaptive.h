@@ -89,7 +89,12 @@ public:
   // Adds one pass's sums of a pixel: (sum rgb, samples) and (sum rgb of the pass's first
   // firstHalf(samples) samples, rays). It writes that pixel's moments and estimate only, so calls
   // for different pixels may run on different threads at once (the renderer adds a pass so).
-  void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays);
+  void add(std::uint32_t x, std::uint32_t y, const glm::vec4& sums, const glm::vec4& halfAndRays) {
+    addPixel(y * width_ + x, sums, halfAndRays);
+  }
+  // The same for the pixel at row-major index `pixel` of the image (y * width + x): the renderer's
+  // lists hold those, and two divisions per call were a tenth of adding a pass.
+  void addPixel(std::uint32_t pixel, const glm::vec4& sums, const glm::vec4& halfAndRays);
   // The fewest pixels worth a thread of their own in the host's per-pixel loops (parallelFor): a
   // pixel's add or decision takes well under a microsecond, starting a thread tens of them.
   static constexpr std::size_t kPixelsPerThread = 16384;

@@ -312,8 +312,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
     }
     parallelFor(missed.size(), ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
       for (std::size_t j = begin; j < end; ++j)
-        for (std::size_t p = 0; p < missSums.size(); p += 2)
-          acc.add(missed[j] % width, missed[j] / width, missSums[p], missSums[p + 1]);
+        for (std::size_t p = 0; p < missSums.size(); p += 2) acc.addPixel(missed[j], missSums[p], missSums[p + 1]);
     });
     if (options.countStats) result.stats.eye += static_cast<std::uint64_t>(missed.size()) * k;
     result.timings.decideMs += msSince(decideStart);
@@ -398,15 +397,20 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       msPerSample = t.gpuMs / (static_cast<double>(n) * k);
 
       auto readStart = Clock::now();
-      sums.resize(2 * together * n);
-      image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
+      // The sums in place where the host sees the buffer's memory (lavapipe), else copied out.
+      const glm::vec4* passSums = static_cast<const glm::vec4*>(image_->hostView());
+      if (!passSums) {
+        sums.resize(2 * together * n);
+        image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
+        passSums = sums.data();
+      }
       // Each entry is a pixel of its own: added on every hardware thread.
       parallelFor(n, ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
         for (std::size_t j = begin; j < end; ++j) {
-          std::uint32_t i = traced[first + order[j]];
+          const std::uint32_t i = traced[first + order[j]];
           for (std::uint32_t p = 0; p < together; ++p) {
             const std::size_t t = 2 * (together * j + p);
-            acc.add(i % width, i / width, sums[t], noHalf & (gpu::kFlagNoHalf0 << p) ? glm::vec4(0.0f) : sums[t + 1]);
+            acc.addPixel(i, passSums[t], noHalf & (gpu::kFlagNoHalf0 << p) ? glm::vec4(0.0f) : passSums[t + 1]);
           }
         }
       });

@@ -39,6 +39,9 @@ public:
   vk::DeviceSize size() const { return size_; }
   const std::string& name() const { return name_; }
   bool mapped() const { return mapped_ != nullptr; }
+  // The buffer's memory as the host sees it, to read in place where it is mapped and coherent (the
+  // GPU's writes visible once its work has completed); null elsewhere: use read().
+  const void* hostView() const { return mapped_ != nullptr && coherent_ ? mapped_ : nullptr; }
   // The pages this buffer's memory imports, or null where it lives in the driver's own memory.
   const HostPages* hostPages() const { return host_.data() ? &host_ : nullptr; }
 
