@@ -598,6 +598,39 @@ TEST_F(Cli, AdaptiveBenchSplitsTheRatioIntoItsFactors) {
   EXPECT_EQ(rows, 1) << r.out;
 }
 
+// bench adaptive --max-spp takes a list: each threshold is measured at each cap, and the last two
+// columns say which cap and what share of the pixels met the threshold before it. A cap below what
+// the threshold needs leaves pixels open (a mean at most the cap), a higher one fewer.
+TEST_F(Cli, AdaptiveBenchMeasuresEachThresholdAtEachCap) {
+  RunResult r = vkray("bench adaptive '" + std::string(VKRAY_SOURCE_DIR) +
+                      "/scenes/showcase.json' --height 48 --runs 1 --thresholds 0.004 --max-spp 8,1024 "
+                      "--max-uniform-spp 64 --reference-spp 256");
+  ASSERT_EQ(r.exitCode, 0) << r.err;
+  EXPECT_NE(r.out.find("max_spp  converged"), std::string::npos) << r.out;
+  std::istringstream lines(r.out);
+  std::string line;
+  std::vector<std::pair<double, double>> rows; // (spp mean, converged %) in the order printed
+  std::vector<int> caps;
+  while (std::getline(lines, line)) {
+    if (line.rfind("E ", 0) != 0) continue;
+    std::istringstream f(line.substr(2));
+    double e, spp, p95, rays, ms, converged;
+    std::string lo, hi, uSpp, uMs, ratio, samples, perSample, perRay; // "nan" outside the uniform points
+
+    int cap = 0;
+    ASSERT_TRUE(f >> e >> spp >> p95 >> rays >> ms >> lo >> hi >> uSpp >> uMs >> ratio >> samples >> perSample >>
+                perRay >> cap >> converged)
+        << line;
+    rows.emplace_back(spp, converged);
+    caps.push_back(cap);
+  }
+  ASSERT_EQ(caps, (std::vector<int>{8, 1024})) << r.out;
+  EXPECT_LE(rows[0].first, 8.0) << r.out;
+  EXPECT_LT(rows[0].second, 100.0) << r.out;
+  EXPECT_GT(rows[1].first, rows[0].first) << r.out;
+  EXPECT_GT(rows[1].second, rows[0].second) << r.out;
+}
+
 // bench adaptive --scene-size renders each scene at its own image size, not at --height rows; the
 // two do not go together.
 TEST_F(Cli, AdaptiveBenchAtTheScenesOwnSize) {

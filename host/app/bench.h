@@ -85,7 +85,8 @@ struct BenchAdaptiveArgs {
   // independent of them, at the price of its own noise in every error.
   std::uint32_t referenceSeed = 0;
   std::vector<double> thresholds{0.016, 0.008, 0.004, 0.002};
-  int minSpp = 4, maxSpp = 1024;              // the thresholds' min_spp and max_spp
+  int minSpp = 4;                             // the thresholds' min_spp
+  std::vector<int> maxSpps{1024};             // their max_spp: each threshold at each
   int minUniformSpp = 4, maxUniformSpp = 256; // uniform sampling at the powers of two between
 };
 

@@ -33,6 +33,7 @@ struct Point {
   std::vector<double> ms; // GPU trace time of each timed run
   double p95 = 0.0;
   double sppMean = 0.0;
+  double converged = 1.0; // share of the pixels whose estimate met the threshold (the rest met max_spp)
   std::uint64_t rays = 0;
 };
 
@@ -85,15 +86,17 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
       uniform.push_back(p);
     }
     for (double e : args.thresholds) {
-      Point p;
-      char label[32];
-      std::snprintf(label, sizeof label, "E %g", e);
-      p.label = label;
-      p.settings = scene.render;
-      p.settings.noiseThreshold = e;
-      p.settings.minSpp = args.minSpp;
-      p.settings.maxSpp = args.maxSpp;
-      adaptive.push_back(p);
+      for (int cap : args.maxSpps) {
+        Point p;
+        char label[32];
+        std::snprintf(label, sizeof label, "E %g", e);
+        p.label = label;
+        p.settings = scene.render;
+        p.settings.noiseThreshold = e;
+        p.settings.minSpp = std::min(args.minSpp, cap);
+        p.settings.maxSpp = cap;
+        adaptive.push_back(p);
+      }
     }
     // One counted run of each for its error and rays (and the pipelines), then the timed runs,
     // interleaved: run r of every point before run r + 1 of any.
@@ -107,6 +110,7 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
       p->p95 = p95Error(r.image, reference);
       p->rays = r.stats.total();
       p->sppMean = r.progressive.passes > 0 ? r.progressive.sppMean : p->settings.spp;
+      p->converged = r.progressive.passes > 0 ? r.progressive.converged : 1.0;
     }
     // One untimed round first: a point's first uncounted render builds its pipeline and wakes
     // the driver's caches (first runs measured up to 4x the median).
@@ -128,8 +132,9 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
                   static_cast<unsigned long long>(p.rays), median(p.ms), *std::min_element(p.ms.begin(), p.ms.end()),
                   *std::max_element(p.ms.begin(), p.ms.end()));
     }
-    std::printf("%-12s %9s %10s %12s %24s %14s %12s %7s %8s %10s %8s\n", "threshold", "spp mean", "p95 error", "rays",
-                "trace ms", "uniform spp", "uniform ms", "ratio", "samples", "rays/spp", "ms/ray");
+    std::printf("%-12s %9s %10s %12s %24s %14s %12s %7s %8s %10s %8s %8s %10s\n", "threshold", "spp mean", "p95 error",
+                "rays", "trace ms", "uniform spp", "uniform ms", "ratio", "samples", "rays/spp", "ms/ray", "max_spp",
+                "converged");
     for (const Point& p : adaptive) {
       const double ms = median(p.ms);
       const double uSpp =
@@ -139,15 +144,18 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
       // The time ratio as the product of three: samples, rays per sample, time per ray.
       const double samples = p.sppMean / uSpp;
       const double raysRatio = static_cast<double>(p.rays) / uRays;
-      std::printf("%-12s %9.1f %10.5f %12llu %10.2f [%.2f, %.2f] %14.1f %12.2f %7.2f %8.2f %10.2f %8.2f\n",
+      std::printf("%-12s %9.1f %10.5f %12llu %10.2f [%.2f, %.2f] %14.1f %12.2f %7.2f %8.2f %10.2f %8.2f %8d %9.2f%%\n",
                   p.label.c_str(), p.sppMean, p.p95, static_cast<unsigned long long>(p.rays), ms,
                   *std::min_element(p.ms.begin(), p.ms.end()), *std::max_element(p.ms.begin(), p.ms.end()), uSpp, uMs,
-                  ms / uMs, samples, raysRatio / samples, (ms / uMs) / raysRatio);
+                  ms / uMs, samples, raysRatio / samples, (ms / uMs) / raysRatio, p.settings.maxSpp,
+                  100.0 * p.converged);
     }
   }
-  std::printf("\nratio: the threshold's median trace time over uniform sampling's at the same 95th-percentile error "
-              "(nan: outside the uniform points' range); it is the product of the last three: samples (the "
-              "threshold's mean spp over uniform's), rays/spp and ms/ray (each the threshold's over uniform's)\n");
+  std::printf(
+      "\nratio: the threshold's median trace time over uniform sampling's at the same 95th-percentile error "
+      "(nan: outside the uniform points' range); it is the product of the last three: samples (the "
+      "threshold's mean spp over uniform's), rays/spp and ms/ray (each the threshold's over uniform's); converged: "
+      "the share of pixels whose error estimate met the threshold (the others stopped at max_spp)\n");
   return 0;
 }
 

@@ -198,7 +198,11 @@ int main(int argc, char** argv) {
       ->check(positiveReal(1e6));
   benchAdaptiveCmd->add_option("--min-spp", benchAdaptive.minSpp, "the thresholds' min_spp")
       ->check(CLI::Range(1, 4096));
-  benchAdaptiveCmd->add_option("--max-spp", benchAdaptive.maxSpp, "the thresholds' max_spp")
+  benchAdaptiveCmd
+      ->add_option("--max-spp", benchAdaptive.maxSpps,
+                   "the thresholds' max_spp, comma-separated: each threshold is measured at each (default 1024)")
+      ->delimiter(',')
+      ->allow_extra_args(false)
       ->check(CLI::Range(1, 4096));
   benchAdaptiveCmd->add_option("--max-uniform-spp", benchAdaptive.maxUniformSpp, "largest uniform point")
       ->check(CLI::Range(1, 4096));
