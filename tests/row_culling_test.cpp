@@ -148,6 +148,27 @@ TEST(RenderRowCulling, CulledRendersEqualTracedOnesBitForBit) {
       EXPECT_EQ(a.pixels.error, b.pixels.error);
       EXPECT_EQ(a.pixels.rays, b.pixels.rays);
       if (scene.render.noiseThreshold > 0.0) culledProgressive += a.timings.culledRows;
+      // The culled rows' eye rays, answered without a trace, are counted apart as well: a sample
+      // each for every pixel of those rows (uniform sampling; adaptive's refine pass culls nothing),
+      // or each pixel's own samples (progressive, whose rows split as the whole image's).
+      EXPECT_EQ(b.timings.culledEyeRays, 0u);
+      const std::uint32_t w = scene.render.width, h = scene.render.height;
+      std::uint64_t expected = 0;
+      if (scene.render.noiseThreshold > 0.0) {
+        GpuScene g = packScene(scene, scene.camera.position, false);
+        for (const RowRun& run :
+             splitRows(makeCullScene(g, makeCameraFrame(scene.camera, w, h)), w, h, 0, h, gpu::kWorkgroupSizeY)) {
+          if (!run.empty) continue;
+          for (std::uint32_t y = run.row0; y < run.row0 + run.rows; ++y)
+            for (std::uint32_t x = 0; x < w; ++x) expected += static_cast<std::uint64_t>(a.pixels.samples[y * w + x]);
+        }
+      } else {
+        const bool adaptive = scene.render.antialiasing == Antialiasing::Adaptive;
+        expected =
+            std::uint64_t{a.timings.culledRows} * w * (adaptive ? 1u : static_cast<std::uint32_t>(scene.render.spp));
+      }
+      EXPECT_EQ(a.timings.culledEyeRays, expected);
+      EXPECT_LE(a.timings.culledEyeRays, a.stats.eye);
     }
   }
   EXPECT_GT(culledProgressive, 0u) << "some progressive render had rows that see nothing";

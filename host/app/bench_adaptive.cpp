@@ -108,7 +108,7 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
       counted.countStats = true;
       RenderResult r = renderer.render(scene.camera, p->settings, counted);
       p->p95 = p95Error(r.image, reference);
-      p->rays = r.stats.total();
+      p->rays = r.stats.total() - r.timings.culledEyeRays; // the rays the device traced
       p->sppMean = r.progressive.passes > 0 ? r.progressive.sppMean : p->settings.spp;
       p->converged = r.progressive.passes > 0 ? r.progressive.converged : 1.0;
     }
@@ -155,7 +155,8 @@ int runBenchAdaptive(const BenchAdaptiveArgs& args) {
       "\nratio: the threshold's median trace time over uniform sampling's at the same 95th-percentile error "
       "(nan: outside the uniform points' range); it is the product of the last three: samples (the "
       "threshold's mean spp over uniform's), rays/spp and ms/ray (each the threshold's over uniform's); converged: "
-      "the share of pixels whose error estimate met the threshold (the others stopped at max_spp)\n");
+      "the share of pixels whose error estimate met the threshold (the others stopped at max_spp); rays: those "
+      "traced, without the eye rays of rows that see nothing (row culling answers them untraced)\n");
   return 0;
 }
 

@@ -143,6 +143,9 @@ struct RenderTimings {
   double decideMs = 0.0;
   int bands = 0;
   std::uint32_t culledRows = 0; // rows filled with the background, not traced (row culling)
+  // The eye rays of those rows' pixels, one per sample, answered without a trace (on the host or by
+  // the fill kernel); RayStats::eye counts them with the traced ones.
+  std::uint64_t culledEyeRays = 0;
   bool pipelineReused = false;
 };
 

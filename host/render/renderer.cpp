@@ -314,6 +314,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       for (std::size_t j = begin; j < end; ++j)
         for (std::size_t p = 0; p < missSums.size(); p += 2) acc.addPixel(missed[j], missSums[p], missSums[p + 1]);
     });
+    result.timings.culledEyeRays += static_cast<std::uint64_t>(missed.size()) * k;
     if (options.countStats) result.stats.eye += static_cast<std::uint64_t>(missed.size()) * k;
     result.timings.decideMs += msSince(decideStart);
     double passMs = 0.0;
@@ -517,6 +518,7 @@ void Renderer::traceBands(bool refine, std::uint32_t begin, std::uint32_t end, c
                               refine ? nullptr : kernels_.fill);
     });
     result.timings.culledRows += culled; // the refine pass culls nothing
+    result.timings.culledEyeRays += std::uint64_t{culled} * width * push.sampleCount;
     result.timings.traceMs += t.gpuMs;
     result.timings.traceWallMs += t.wallMs;
     ++result.timings.bands;
