@@ -616,7 +616,6 @@ TEST_F(Cli, AdaptiveBenchMeasuresEachThresholdAtEachCap) {
     std::istringstream f(line.substr(2));
     double e, spp, p95, rays, ms, converged;
     std::string lo, hi, uSpp, uMs, ratio, samples, perSample, perRay; // "nan" outside the uniform points
-
     int cap = 0;
     ASSERT_TRUE(f >> e >> spp >> p95 >> rays >> ms >> lo >> hi >> uSpp >> uMs >> ratio >> samples >> perSample >>
                 perRay >> cap >> converged)
