@@ -314,8 +314,9 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       for (std::size_t j = begin; j < end; ++j)
         for (std::size_t p = 0; p < missSums.size(); p += 2) acc.addPixel(missed[j], missSums[p], missSums[p + 1]);
     });
-    result.timings.culledEyeRays += static_cast<std::uint64_t>(missed.size()) * k;
-    if (options.countStats) result.stats.eye += static_cast<std::uint64_t>(missed.size()) * k;
+    const std::uint64_t missedEyeRays = static_cast<std::uint64_t>(missed.size()) * k; // one per sample
+    result.timings.culledEyeRays += missedEyeRays;
+    if (options.countStats) result.stats.eye += missedEyeRays;
     result.timings.decideMs += msSince(decideStart);
     double passMs = 0.0;
     for (std::size_t first = 0; first < traced.size();) {
@@ -399,12 +400,7 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
 
       auto readStart = Clock::now();
       // The sums in place where the host sees the buffer's memory (lavapipe), else copied out.
-      const glm::vec4* passSums = static_cast<const glm::vec4*>(image_->hostView());
-      if (!passSums) {
-        sums.resize(2 * together * n);
-        image_->read(sums.data(), sums.size() * sizeof(glm::vec4));
-        passSums = sums.data();
-      }
+      const glm::vec4* passSums = image_->view(sums, 2 * together * n);
       // Each entry is a pixel of its own: added on every hardware thread.
       parallelFor(n, ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
         for (std::size_t j = begin; j < end; ++j) {

@@ -5,6 +5,7 @@
 #include <cstddef>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include <vulkan/vulkan_raii.hpp>
 
@@ -47,6 +48,14 @@ public:
 
   void write(const void* data, vk::DeviceSize bytes, vk::DeviceSize offset = 0);
   void read(void* out, vk::DeviceSize bytes, vk::DeviceSize offset = 0) const;
+  // The buffer's first `count` elements: read in place through hostView() where it allows, else
+  // copied out into `copy` (one queue submission), which must outlive the pointer's use.
+  template <class T> const T* view(std::vector<T>& copy, std::size_t count) const {
+    if (const void* in = hostView()) return static_cast<const T*>(in);
+    copy.resize(count);
+    read(copy.data(), count * sizeof(T));
+    return copy.data();
+  }
 
 private:
   const Context* context_;
