@@ -1,6 +1,7 @@
 // Shared command-line flags (see cli_options.h).
 #include "app/cli_options.h"
 
+#include <charconv>
 #include <cmath>
 #include <sstream>
 
@@ -21,6 +22,25 @@ CLI::Validator realRange(double lo, double hi) {
         return {};
       },
       "REAL in [" + text + "]");
+}
+
+// A whole number in [lo, hi]: CLI::Range would call "many" or "1.5" out of range; this says what is
+// wrong with it.
+CLI::Validator wholeRange(long long lo, long long hi) {
+  std::string text = std::to_string(lo) + " to " + std::to_string(hi);
+  return CLI::Validator(
+      [lo, hi, text](std::string& input) -> std::string {
+        long long v = 0;
+        const char* first = input.data();
+        const char* last = first + input.size();
+        if (first != last && *first == '+') ++first;
+        auto [end, ec] = std::from_chars(first, last, v);
+        if (end != last || first == last || (ec != std::errc() && ec != std::errc::result_out_of_range))
+          return "Value " + input + " is not a whole number";
+        if (ec == std::errc::result_out_of_range || v < lo || v > hi) return "Value " + input + " not in range " + text;
+        return {};
+      },
+      "INT in [" + std::to_string(lo) + " - " + std::to_string(hi) + "]");
 }
 
 // A real number in (0, hi]: zero, negative numbers and NaN are refused.
@@ -89,11 +109,11 @@ void applyKernelFlags(const KernelFlags& f, RenderOptions& o) {
 }
 
 void addRenderFlags(CLI::App& app, RenderFlags& f) {
-  app.add_option("--width", f.width, "image width in pixels")->check(CLI::Range(1ll, kMaxImageSide));
-  app.add_option("--height", f.height, "image height in pixels")->check(CLI::Range(1ll, kMaxImageSide));
+  app.add_option("--width", f.width, "image width in pixels")->check(wholeRange(1ll, kMaxImageSide));
+  app.add_option("--height", f.height, "image height in pixels")->check(wholeRange(1ll, kMaxImageSide));
   app.add_option("--max-depth", f.maxDepth, "reflection/refraction bounces after the eye ray")
-      ->check(CLI::Range(0ll, kMaxDepthLimit));
-  app.add_option("--spp", f.spp, "samples per pixel")->check(CLI::Range(1ll, kMaxSpp));
+      ->check(wholeRange(0ll, kMaxDepthLimit));
+  app.add_option("--spp", f.spp, "samples per pixel")->check(wholeRange(1ll, kMaxSpp));
   app.add_option("--bailout", f.bailout, "skip branches whose weight is below this (0: trace all)")
       ->check(realRange(0.0, 1.0));
   app.add_option("--aa", f.antialiasing, "antialiasing: stratified (every pixel gets spp) or adaptive")
@@ -107,13 +127,13 @@ void addRenderFlags(CLI::App& app, RenderFlags& f) {
       ->check(positiveReal(kMaxTimeLimitSeconds));
   app.add_option("--method", f.method, "backward (rays from the eye, default) or forward (photons from the lights)")
       ->check(CLI::IsMember(enumNameList<Method>()));
-  app.add_option("--photons", f.photons, "forward: photons each light emits")->check(CLI::Range(1ll, kMaxPhotons));
+  app.add_option("--photons", f.photons, "forward: photons each light emits")->check(wholeRange(1ll, kMaxPhotons));
   app.add_option("--min-spp", f.minSpp, "progressive: samples every pixel gets first (default 4)")
-      ->check(CLI::Range(1ll, kMaxSpp));
+      ->check(wholeRange(1ll, kMaxSpp));
   app.add_option("--max-spp", f.maxSpp, "progressive: the most samples a pixel gets (default 1024)")
-      ->check(CLI::Range(1ll, kMaxSpp));
+      ->check(wholeRange(1ll, kMaxSpp));
   app.add_option("--seed", f.seed, "which scrambling of the sample sequences the pixels use (default 0)")
-      ->check(CLI::Range(0ll, 0xFFFFFFFFll));
+      ->check(wholeRange(0ll, 0xFFFFFFFFll));
   app.add_option("--numerics", f.numerics, "intersection numerics: robust (default) or naive")
       ->check(CLI::IsMember(enumNameList<Numerics>()));
   app.add_option("--fresnel", f.fresnel, "dielectric Fresnel: exact or schlick")

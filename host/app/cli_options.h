@@ -34,6 +34,8 @@ struct ModelFlags {
 // ("not in range 1 to 10000"; CLI::Range prints doubles with six decimals) and refuses NaN.
 CLI::Validator realRange(double lo, double hi);
 CLI::Validator positiveReal(double hi); // (0, hi], NaN refused
+// A whole number in [lo, hi]; "many" and "1.5" are "not a whole number", not out of range.
+CLI::Validator wholeRange(long long lo, long long hi);
 
 // The renderer's own switches, for comparison runs: each maps onto a RenderOptions field.
 struct KernelFlags {

@@ -112,7 +112,7 @@ int main(int argc, char** argv) {
   auto* benchTimeCmd = benchCmd->add_subcommand("time", "median GPU trace time of repeated renders");
   benchTimeCmd->add_option("scenes", benchTime.scenes, "scene files")->required();
   benchTimeCmd->add_option("--runs", benchTime.runs, "timed runs per scene (after one warm-up)")
-      ->check(CLI::Range(1, 1000));
+      ->check(wholeRange(1, 1000));
   addRenderFlags(*benchTimeCmd, benchTime.render);
   addKernelFlags(*benchTimeCmd, benchTime.kernel);
   addDeviceFlags(*benchTimeCmd, benchTime.device);
@@ -120,8 +120,8 @@ int main(int argc, char** argv) {
   BenchSpecializeArgs benchSpec;
   auto* benchSpecCmd = benchCmd->add_subcommand("specialize", "specialized vs all-features pipelines, per scene");
   benchSpecCmd->add_option("scenes", benchSpec.scenes, "scene files (default: every bundled scene)");
-  benchSpecCmd->add_option("--runs", benchSpec.runs, "timed runs per point")->check(CLI::Range(1, 1000));
-  benchSpecCmd->add_option("--height", benchSpec.height, "image height (aspect kept)")->check(CLI::Range(8, 4096));
+  benchSpecCmd->add_option("--runs", benchSpec.runs, "timed runs per point")->check(wholeRange(1, 1000));
+  benchSpecCmd->add_option("--height", benchSpec.height, "image height (aspect kept)")->check(wholeRange(8, 4096));
   addDeviceFlags(*benchSpecCmd, benchSpec.device);
 
   ViewArgs view;
@@ -133,14 +133,14 @@ int main(int argc, char** argv) {
   auto* benchMeshesCmd =
       benchCmd->add_subcommand("meshes", "BVH build and ray throughput on procedural meshes, with Embree alongside");
   benchMeshesCmd->add_option("--sizes", benchMeshes.sizes, "triangle counts (approximate)")->delimiter(',');
-  benchMeshesCmd->add_option("--width", benchMeshes.width, "image width")->check(CLI::Range(8, 16384));
-  benchMeshesCmd->add_option("--height", benchMeshes.height, "image height")->check(CLI::Range(8, 16384));
-  benchMeshesCmd->add_option("--runs", benchMeshes.runs, "timed runs per point")->check(CLI::Range(1, 1000));
+  benchMeshesCmd->add_option("--width", benchMeshes.width, "image width")->check(wholeRange(8, 16384));
+  benchMeshesCmd->add_option("--height", benchMeshes.height, "image height")->check(wholeRange(8, 16384));
+  benchMeshesCmd->add_option("--runs", benchMeshes.runs, "timed runs per point")->check(wholeRange(1, 1000));
   benchMeshesCmd
       ->add_option("--rounds", benchMeshes.rounds,
                    "measure every size this many times, interleaved (round r of every size before round r+1 of "
                    "any), and print each ratio's median and range over the rounds")
-      ->check(CLI::Range(1, 1000));
+      ->check(wholeRange(1, 1000));
   benchMeshesCmd->add_flag("--no-embree", benchMeshes.noEmbree, "skip the Embree side");
   benchMeshesCmd->add_flag("--no-entry-points", benchMeshes.noEntryPoints,
                            "vkray's eye rays walk the BVH from the root, not from their tile's entry points");
@@ -159,16 +159,16 @@ int main(int argc, char** argv) {
                           "scene files (default: showcase, glass, seed, numerics-cracks, numerics-far-sphere, "
                           "numerics-huge-ground, textured)");
   benchAccCmd->add_option("--out", benchAcc.out, "output directory (CSV, reference and heat-map images)");
-  benchAccCmd->add_option("--runs", benchAcc.runs, "timed runs per point, interleaved")->check(CLI::Range(1, 1000));
-  benchAccCmd->add_option("--height", benchAcc.height, "image height (aspect kept)")->check(CLI::Range(8, 4096));
+  benchAccCmd->add_option("--runs", benchAcc.runs, "timed runs per point, interleaved")->check(wholeRange(1, 1000));
+  benchAccCmd->add_option("--height", benchAcc.height, "image height (aspect kept)")->check(wholeRange(8, 4096));
   benchAccCmd->add_option("--reference-spp", benchAcc.referenceSpp, "samples per pixel of the reference")
-      ->check(CLI::Range(1, 4096));
+      ->check(wholeRange(1, 4096));
   benchAccCmd->add_flag("--quick", benchAcc.quick, "tiny images and few points (seconds)");
   benchAccCmd->add_flag("--count-instructions", benchAcc.countInstructions,
                         "under callgrind: render each point once at --count-height between client requests, no "
                         "timing (tools/accuracy-report --count-instructions)");
   benchAccCmd->add_option("--count-height", benchAcc.countHeight, "image height of --count-instructions")
-      ->check(CLI::Range(8, 4096));
+      ->check(wholeRange(8, 4096));
   addDeviceFlags(*benchAccCmd, benchAcc.device);
 
   BenchAdaptiveArgs benchAdaptive;
@@ -177,35 +177,35 @@ int main(int argc, char** argv) {
   benchAdaptiveCmd->add_option("scenes", benchAdaptive.scenes,
                                "scene files (default: showcase, glass, seed, textured)");
   benchAdaptiveCmd->add_option("--runs", benchAdaptive.runs, "timed runs per point, interleaved")
-      ->check(CLI::Range(1, 1000));
+      ->check(wholeRange(1, 1000));
   auto* adaptiveHeight = benchAdaptiveCmd->add_option("--height", benchAdaptive.height, "image height (aspect kept)")
-                             ->check(CLI::Range(8, 4096));
+                             ->check(wholeRange(8, 4096));
   benchAdaptiveCmd
       ->add_flag("--scene-size", benchAdaptive.sceneSize,
                  "each scene at its own image size (the bundled ones: 800x600, seed 640x480), where less of "
                  "the picture is edges than at --height's default 180 rows; minutes per scene")
       ->excludes(adaptiveHeight);
   benchAdaptiveCmd->add_option("--reference-spp", benchAdaptive.referenceSpp, "samples per pixel of the reference")
-      ->check(CLI::Range(1, 4096));
+      ->check(wholeRange(1, 4096));
   benchAdaptiveCmd
       ->add_option("--reference-seed", benchAdaptive.referenceSeed,
                    "render.seed of the reference: 0 (default) shares its first samples with every point, another "
                    "seed none (its own noise then adds to every error: raise --reference-spp)")
-      ->check(CLI::Range(0ll, 0xFFFFFFFFll));
+      ->check(wholeRange(0ll, 0xFFFFFFFFll));
   benchAdaptiveCmd->add_option("--thresholds", benchAdaptive.thresholds, "noise thresholds, comma-separated")
       ->delimiter(',')
       ->allow_extra_args(false) // one argument, split at the commas: the scenes that follow stay scenes
       ->check(positiveReal(1e6));
   benchAdaptiveCmd->add_option("--min-spp", benchAdaptive.minSpp, "the thresholds' min_spp")
-      ->check(CLI::Range(1, 4096));
+      ->check(wholeRange(1, 4096));
   benchAdaptiveCmd
       ->add_option("--max-spp", benchAdaptive.maxSpps,
                    "the thresholds' max_spp, comma-separated: each threshold is measured at each (default 1024)")
       ->delimiter(',')
       ->allow_extra_args(false)
-      ->check(CLI::Range(1, 4096));
+      ->check(wholeRange(1, 4096));
   benchAdaptiveCmd->add_option("--max-uniform-spp", benchAdaptive.maxUniformSpp, "largest uniform point")
-      ->check(CLI::Range(1, 4096));
+      ->check(wholeRange(1, 4096));
   addDeviceFlags(*benchAdaptiveCmd, benchAdaptive.device);
 
   BenchForwardArgs benchForward;
@@ -213,18 +213,18 @@ int main(int argc, char** argv) {
       "forward", "forward against backward tracing: error against time, and the photons the lens catches");
   benchForwardCmd->add_option("scenes", benchForward.scenes, "scene files (default: seed, glass)");
   benchForwardCmd->add_option("--runs", benchForward.runs, "timed runs per point, interleaved")
-      ->check(CLI::Range(1, 1000));
+      ->check(wholeRange(1, 1000));
   benchForwardCmd->add_option("--height", benchForward.height, "image height (aspect kept)")
-      ->check(CLI::Range(8, 4096));
+      ->check(wholeRange(8, 4096));
   benchForwardCmd->add_option("--aperture", benchForward.aperture, "lens radius, as a fraction of the focus distance")
       ->check(positiveReal(1.0));
   benchForwardCmd->add_option("--reference-spp", benchForward.referenceSpp, "samples per pixel of the reference")
-      ->check(CLI::Range(1, 4096));
-  benchForwardCmd->add_option("--max-spp", benchForward.maxSpp, "largest backward point")->check(CLI::Range(1, 4096));
+      ->check(wholeRange(1, 4096));
+  benchForwardCmd->add_option("--max-spp", benchForward.maxSpp, "largest backward point")->check(wholeRange(1, 4096));
   benchForwardCmd->add_option("--min-photons", benchForward.minPhotons, "smallest forward point (photons per light)")
-      ->check(CLI::Range(1ll, kMaxPhotons));
+      ->check(wholeRange(1ll, kMaxPhotons));
   benchForwardCmd->add_option("--max-photons", benchForward.maxPhotons, "largest forward point (x4 steps)")
-      ->check(CLI::Range(1ll, kMaxPhotons));
+      ->check(wholeRange(1ll, kMaxPhotons));
   benchForwardCmd->add_option("--csv", benchForward.csv, "write every point to this CSV (tools/forward-plot)");
   addDeviceFlags(*benchForwardCmd, benchForward.device);
 

@@ -16,12 +16,12 @@ CLI::App* addViewCommand(CLI::App& app, ViewArgs& a) {
                   "scene file (JSON) or model file (.obj, .gltf, .glb, .ply); reloaded when it changes")
       ->required();
   cmd->add_option("--frames", a.frames, "scripted: trace this many frames, save --screenshot, exit")
-      ->check(CLI::Range(1u, 1u << 20));
+      ->check(wholeRange(1u, 1u << 20));
   cmd->add_option("--screenshot", a.screenshot,
                   "screenshot file (.png, .pfm or .exr): written after --frames; otherwise where the P key saves");
   cmd->add_flag("--no-vsync", a.noVsync, "present without waiting for vertical blank (MAILBOX or IMMEDIATE)");
   cmd->add_option("--max-samples", a.maxSamples, "samples per pixel at which accumulation stops")
-      ->check(CLI::Range(1u, 1u << 24));
+      ->check(wholeRange(1u, 1u << 24));
   cmd->add_option("--scale", a.scale, "render resolution relative to the window (the blit scales it up)")
       ->check(CLI::IsMember({1.0, 0.5, 0.25}));
   cmd->add_option("--motion-scale", a.motionScale,
@@ -108,7 +108,7 @@ CLI::App* addBenchViewCommand(CLI::App& bench, BenchViewArgs& a) {
   auto* cmd = bench.add_subcommand("view", "viewer frames per second and where a frame's time goes (needs a display)");
   cmd->add_option("scenes", a.scenes, "scene files")->required();
   cmd->add_option("--frames", a.frames, "timed frames per row (after 5 warm-up frames)")
-      ->check(CLI::Range(1u, 100000u));
+      ->check(wholeRange(1u, 100000u));
   cmd->add_option("--spin", a.spin, "degrees the camera orbits per frame in the moving rows");
   addRenderFlags(*cmd, a.render);
   addKernelFlags(*cmd, a.kernel);
