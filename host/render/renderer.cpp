@@ -403,7 +403,9 @@ void Renderer::renderProgressive(const RenderSettings& settings, const RenderOpt
       const glm::vec4* passSums = image_->view(sums, 2 * together * n);
       // Each entry is a pixel of its own: added on every hardware thread.
       parallelFor(n, ProgressiveImage::kPixelsPerThread, [&](std::size_t begin, std::size_t end) {
+        constexpr std::size_t ahead = ProgressiveImage::kPrefetchAhead;
         for (std::size_t j = begin; j < end; ++j) {
+          if (j + ahead < end) acc.prefetchPixel(traced[first + order[j + ahead]]);
           const std::uint32_t i = traced[first + order[j]];
           for (std::uint32_t p = 0; p < together; ++p) {
             const std::size_t t = 2 * (together * j + p);
