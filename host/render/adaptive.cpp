@@ -80,7 +80,7 @@ ProgressiveImage::ProgressiveImage(std::uint32_t width, std::uint32_t height, st
       errors_(pixels_.size(), std::numeric_limits<float>::infinity()) {}
 
 void ProgressiveImage::addPixel(std::uint32_t pixel, const glm::vec4& sums, const glm::vec4& halfAndRays) {
-  const std::size_t i = pixel - static_cast<std::size_t>(rowBegin_) * width_;
+  const std::size_t i = index(pixel);
   PixelMoments& m = pixels_[i];
   // One call per pixel per pass: the blocks shift by one pass, and the estimate they gave so far
   // (kept by the last call) becomes the previous decision's.

@@ -100,7 +100,7 @@ public:
   // prefetcher cannot follow, and a third of addPixel's time was its first load of the moments.
   static constexpr std::size_t kPrefetchAhead = 8; // pixels ahead, in the caller's order
   void prefetchPixel(std::uint32_t pixel) const {
-    const std::size_t i = pixel - static_cast<std::size_t>(rowBegin_) * width_;
+    const std::size_t i = index(pixel);
     const char* m = reinterpret_cast<const char*>(&pixels_[i]);
     __builtin_prefetch(m, 1);
     __builtin_prefetch(m + sizeof(PixelMoments) - 1, 1);
@@ -146,6 +146,8 @@ private:
   std::size_t index(std::uint32_t x, std::uint32_t y) const {
     return static_cast<std::size_t>(y - rowBegin_) * width_ + x;
   }
+  // The stored index of the pixel at row-major image index `pixel` (y * width + x).
+  std::size_t index(std::uint32_t pixel) const { return pixel - static_cast<std::size_t>(rowBegin_) * width_; }
   // Calls visit(index) for each pixel of (x, y)'s 3 x 3 neighbourhood (itself included) that has
   // been traced: inside the image and the stored rows, with samples.
   template <class Visit> void forTracedNeighbours(std::uint32_t x, std::uint32_t y, Visit visit) const;
